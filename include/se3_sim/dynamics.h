@@ -1,0 +1,80 @@
+// Rigid-body dynamics of the free-floating (or fixed-base) tree, section 6 of Reuss 2002.
+//
+// State: base pose f0 (body 0 in the world; fixed-base models use it as the mount pose),
+// joint positions q (size n) and generalized velocity v (size nv): for a free base
+// v = [V0; qdot] with V0 = [w; v] the base twist in its own frame (eq. 12), else v = qdot.
+// Accelerations are time derivatives of these components (dV0/dt in the base frame).
+//
+// Every function works on a preallocated Data and allocates nothing.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "se3_sim/model.h"
+
+namespace se3 {
+
+using VecX = Eigen::VectorXd;
+using MatX = Eigen::MatrixXd;
+using Mat36 = Eigen::Matrix<double, 3, 6>;
+
+/// The workspace: one per thread, sized once for a model.
+struct Data {
+  explicit Data(const Model& model);
+
+  std::vector<SE3> Xup;   ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
+  std::vector<SE3> oMb;   ///< body i in the world
+  std::vector<Vec6> V;    ///< body twists (body frame), eq. (33)
+  std::vector<Vec6> A;    ///< body accelerations (body frame, gravity folded in), eq. (35)
+  std::vector<Vec6> c;    ///< velocity-product accelerations gamma, eq. (34)
+  std::vector<Vec6> F;    ///< body wrenches / bias forces, eq. (36)
+  std::vector<Mat6> IA;   ///< articulated-body inertias, eq. (38)
+  std::vector<Vec6> U;    ///< IA S
+  std::vector<double> Dinv, u;
+  std::vector<Inertia> Ic;  ///< composite inertias (CRBA)
+
+  VecX tau;   ///< rnea output (nv)
+  VecX ddq;   ///< aba output (nv)
+  VecX nle;   ///< bias H (nv)
+  MatX M;     ///< crba output (nv x nv, both triangles)
+  MatX Minv;  ///< minv output (nv x nv, both triangles)
+  // scratch for minv (eqs. 58-63): 6 x nv blocks per body
+  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> Fm, Pm;
+};
+
+/// Positions of every body: Xup and oMb (the product of exponentials, section 5).
+void forward_kinematics(const Model& model, Data& data, const SE3& base, const VecX& q);
+
+/// Recursive Newton-Euler, eqs. (33)-(37) (with V_j, not Vdot_j, inside ad* in (36)).
+/// Returns tau (nv): for a free base the first six entries are the base wrench [N; F] (base
+/// frame) needed for the motion, zero for a free motion. f_ext_base: wrench applied on the base.
+const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
+                 const VecX& a, const Vec6* f_ext_base = nullptr);
+
+/// Articulated-body algorithm, eqs. (38)-(43). Returns ddq (nv), with dV0/dt first for a free
+/// base. f_ext_base: wrench applied on the base (base frame, about its origin).
+const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
+                const VecX& tau, const Vec6* f_ext_base = nullptr);
+
+/// Mass matrix D (eq. 50) by the composite-rigid-body algorithm; both triangles filled.
+const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q);
+
+/// D^-1 by the recursive factorization of eqs. (55)-(63), O(n) per column; both triangles.
+const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q);
+
+/// H(q, v, g) with D vdot + H = tau (note: the paper's eq. (30) writes +H on the right).
+const VecX& bias(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v);
+
+/// Kinetic energy 1/2 v^T D v, computed recursively (needs no mass matrix).
+double kinetic_energy(const Model& model, Data& data, const SE3& base, const VecX& q,
+                      const VecX& v);
+/// Potential energy -sum m_i g . c_i (world frame, zero at the world origin).
+double potential_energy(const Model& model, Data& data, const SE3& base, const VecX& q);
+/// Total spatial momentum [angular about the world origin; linear], world frame.
+Vec6 spatial_momentum(const Model& model, Data& data, const SE3& base, const VecX& q,
+                      const VecX& v);
+/// Centre of mass of the whole system, world frame.
+Vec3 center_of_mass(const Model& model, Data& data, const SE3& base, const VecX& q);
+
+}  // namespace se3

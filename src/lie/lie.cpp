@@ -1,0 +1,277 @@
+// SO(3) / SE(3) maps of Reuss 2002, section 2 and 4, in forms that stay exact to machine
+// precision at theta -> 0 (series) and theta -> pi (no division by sin theta).
+#include "se3_sim/lie.h"
+
+#include <cmath>
+
+namespace se3 {
+namespace {
+
+// Below this angle the trigonometric coefficients are evaluated by their Taylor series; the
+// series are truncated where the next term is below 1e-20 relative at the threshold.
+constexpr double kSeries = 0.1;
+
+// sin(t) / t
+double sinc(double t) {
+  if (std::abs(t) < kSeries) {
+    const double t2 = t * t;
+    return 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)));
+  }
+  return std::sin(t) / t;
+}
+
+// The coefficients of Rodrigues' formula (8) and of the left Jacobian (10):
+// A = sin t / t, B = (1 - cos t) / t^2, C = (t - sin t) / t^3.
+struct RodriguesCoeffs {
+  double A, B, C;
+  explicit RodriguesCoeffs(double t) {
+    const double t2 = t * t;
+    A = sinc(t);
+    const double s = sinc(0.5 * t);
+    B = 0.5 * s * s;  // (1 - cos t)/t^2 = 2 sin^2(t/2)/t^2, no cancellation
+    if (t < kSeries) {
+      C = 1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 * (1.0 / 362880.0)));
+    } else {
+      C = (t - std::sin(t)) / (t2 * t);
+    }
+  }
+};
+
+// D = (1 - (t/2) cot(t/2)) / t^2, the u^2 coefficient of eq. (11) divided by t^2. The paper's
+// form (1 + cos t) / sin t = cot(t/2) is 0/0 at t = pi; cos(t/2)/sin(t/2) is not.
+double left_jacobian_inv_coeff(double t) {
+  const double t2 = t * t;
+  if (t < kSeries) {
+    return 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0 + t2 * (1.0 / 1209600.0)));
+  }
+  const double h = 0.5 * t;
+  return (1.0 - h * std::cos(h) / std::sin(h)) / t2;
+}
+
+}  // namespace
+
+Mat4 SE3::matrix() const {
+  Mat4 m = Mat4::Identity();
+  m.topLeftCorner<3, 3>() = R;
+  m.topRightCorner<3, 1>() = p;
+  return m;
+}
+
+Mat4 hat6(const Vec6& xi) {
+  Mat4 m = Mat4::Zero();
+  m.topLeftCorner<3, 3>() = hat(xi.head<3>());
+  m.topRightCorner<3, 1>() = xi.tail<3>();
+  return m;
+}
+
+Vec6 vee6(const Mat4& m) {
+  Vec6 xi;
+  xi.head<3>() = vee(m.topLeftCorner<3, 3>());
+  xi.tail<3>() = m.topRightCorner<3, 1>();
+  return xi;
+}
+
+// Eq. (8).
+Mat3 exp_so3(const Vec3& a) {
+  const double t = a.norm();
+  const RodriguesCoeffs k(t);
+  const Mat3 A = hat(a);
+  return Mat3::Identity() + k.A * A + k.B * A * A;
+}
+
+// Eq. (9), made exact everywhere. sin t |u| = |vee(R)| and cos t = (tr R - 1)/2 give t by
+// atan2 (well conditioned for all t). Away from pi the axis comes from the skew part, scaled by
+// t / sin t; near pi the skew part vanishes, so the axis comes from the symmetric part
+// R + R^T - 2 cos t I = 2 (1 - cos t) u u^T and only its sign from the skew part.
+Vec3 log_so3(const Mat3& R) {
+  const Vec3 s = vee(R);  // sin(t) u
+  const double sin_t = s.norm();
+  const double cos_t = 0.5 * (R.trace() - 1.0);
+  const double t = std::atan2(sin_t, cos_t);
+  if (cos_t > -0.7) {
+    return s / sinc(t);
+  }
+  Mat3 B = R + R.transpose();
+  B.diagonal().array() -= 2.0 * cos_t;
+  int k;
+  B.diagonal().maxCoeff(&k);
+  Vec3 u = B.col(k).normalized();
+  if (u.dot(s) < 0) u = -u;
+  return t * u;
+}
+
+Mat3 left_jacobian_so3(const Vec3& a) {
+  const RodriguesCoeffs k(a.norm());
+  const Mat3 A = hat(a);
+  return Mat3::Identity() + k.B * A + k.C * A * A;
+}
+
+Mat3 left_jacobian_inv_so3(const Vec3& a) {
+  const double D = left_jacobian_inv_coeff(a.norm());
+  const Mat3 A = hat(a);
+  return Mat3::Identity() - 0.5 * A + D * A * A;
+}
+
+// Eqs. (6), (8), (10).
+SE3 exp_se3(const Vec6& xi) {
+  const Vec3 a = xi.head<3>();
+  const RodriguesCoeffs k(a.norm());
+  const Mat3 A = hat(a);
+  const Mat3 A2 = A * A;
+  SE3 f;
+  f.R = Mat3::Identity() + k.A * A + k.B * A2;
+  f.p = xi.tail<3>() + k.B * (A * xi.tail<3>()) + k.C * (A2 * xi.tail<3>());
+  return f;
+}
+
+// Eqs. (7), (9), (11).
+Vec6 log_se3(const SE3& f) {
+  Vec6 xi;
+  const Vec3 a = log_so3(f.R);
+  xi.head<3>() = a;
+  xi.tail<3>() = left_jacobian_inv_so3(a) * f.p;
+  return xi;
+}
+
+// Eq. (17).
+Mat6 Ad(const SE3& f) {
+  Mat6 m;
+  m.topLeftCorner<3, 3>() = f.R;
+  m.topRightCorner<3, 3>().setZero();
+  m.bottomLeftCorner<3, 3>() = hat(f.p) * f.R;
+  m.bottomRightCorner<3, 3>() = f.R;
+  return m;
+}
+
+// Eq. (18).
+Mat6 Ad_inv(const SE3& f) {
+  Mat6 m;
+  const Mat3 Rt = f.R.transpose();
+  m.topLeftCorner<3, 3>() = Rt;
+  m.topRightCorner<3, 3>().setZero();
+  m.bottomLeftCorner<3, 3>() = -Rt * hat(f.p);
+  m.bottomRightCorner<3, 3>() = Rt;
+  return m;
+}
+
+// Eq. (21).
+Mat6 ad(const Vec6& V) {
+  Mat6 m;
+  const Mat3 W = hat(V.head<3>());
+  m.topLeftCorner<3, 3>() = W;
+  m.topRightCorner<3, 3>().setZero();
+  m.bottomLeftCorner<3, 3>() = hat(V.tail<3>());
+  m.bottomRightCorner<3, 3>() = W;
+  return m;
+}
+
+// Eq. (22).
+Mat6 ad_star(const Vec6& V) { return ad(V).transpose(); }
+
+// Left Jacobian of SE(3) in closed form (angular-first ordering):
+// dexp([a; l]) = [J(a), 0; Q(a, l), J(a)], Q the coupling block of the series sum ad^k/(k+1)!.
+namespace {
+Mat3 dexp_coupling(const Vec3& a, const Vec3& l) {
+  const double t = a.norm();
+  const double t2 = t * t;
+  double c1, c2, c3;
+  if (t < kSeries) {
+    // c1 = (t - sin t)/t^3, c2 = (t^2/2 + cos t - 1)/t^4,
+    // c3 = (c2 - 3 (t - sin t - t^3/6)/t^5) / 2, by their series.
+    c1 = 1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0));
+    c2 = 1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0));
+    const double e = -1.0 / 120.0 + t2 * (1.0 / 5040.0 - t2 * (1.0 / 362880.0 - t2 / 39916800.0));
+    c3 = 0.5 * (c2 - 3.0 * e);
+  } else {
+    const double s = std::sin(t), c = std::cos(t);
+    c1 = (t - s) / (t2 * t);
+    c2 = (0.5 * t2 + c - 1.0) / (t2 * t2);
+    c3 = 0.5 * (c2 - 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t));
+  }
+  const Mat3 A = hat(a), L = hat(l);
+  const Mat3 AL = A * L, LA = L * A, ALA = AL * A;
+  return 0.5 * L + c1 * (AL + LA + ALA) + c2 * (A * AL + LA * A - 3.0 * ALA) +
+         c3 * (ALA * A + A * ALA);
+}
+}  // namespace
+
+Mat6 dexp_se3(const Vec6& xi) {
+  const Mat3 J = left_jacobian_so3(xi.head<3>());
+  Mat6 m;
+  m.topLeftCorner<3, 3>() = J;
+  m.topRightCorner<3, 3>().setZero();
+  m.bottomLeftCorner<3, 3>() = dexp_coupling(xi.head<3>(), xi.tail<3>());
+  m.bottomRightCorner<3, 3>() = J;
+  return m;
+}
+
+Mat6 dexp_inv_se3(const Vec6& xi) {
+  const Mat3 Ji = left_jacobian_inv_so3(xi.head<3>());
+  Mat6 m;
+  m.topLeftCorner<3, 3>() = Ji;
+  m.topRightCorner<3, 3>().setZero();
+  m.bottomLeftCorner<3, 3>() = -Ji * dexp_coupling(xi.head<3>(), xi.tail<3>()) * Ji;
+  m.bottomRightCorner<3, 3>() = Ji;
+  return m;
+}
+
+// Eq. (23) from the centre of mass: I_O = I_G - m hat(c)^2.
+Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
+  Inertia in;
+  in.m = mass;
+  in.h = mass * com;
+  const Mat3 C = hat(com);
+  in.I = I_com - mass * C * C;
+  in.I = 0.5 * (in.I + in.I.transpose()).eval();
+  return in;
+}
+
+Mat6 Inertia::matrix() const {
+  Mat6 J;
+  J.topLeftCorner<3, 3>() = I;
+  J.topRightCorner<3, 3>() = hat(h);
+  J.bottomLeftCorner<3, 3>() = -hat(h);
+  J.bottomRightCorner<3, 3>() = m * Mat3::Identity();
+  return J;
+}
+
+// Expressed in the frame where the body sits at f: x' = R x + p.
+// I'_O' = R I_O R^T - hat(p) hat(R h) - hat(R h) hat(p) - m hat(p)^2.
+Inertia Inertia::transformed(const SE3& f) const {
+  Inertia out;
+  out.m = m;
+  const Vec3 Rh = f.R * h;
+  out.h = Rh + m * f.p;
+  const Mat3 P = hat(f.p), H = hat(Rh);
+  out.I = f.R * I * f.R.transpose() - P * H - H * P - m * P * P;
+  out.I = 0.5 * (out.I + out.I.transpose()).eval();
+  return out;
+}
+
+Mat6 spatial_inertia(double m, const Vec3& r, const Mat3& I_G) {
+  return Inertia::from_com(m, r, I_G).matrix();
+}
+
+// Eq. (24).
+Vec6 newton_euler_wrench(const Mat6& J, const Vec6& V, const Vec6& Vdot) {
+  return J * Vdot - ad_star(V) * (J * V);
+}
+
+Mat3 orthonormalize(const Mat3& m) {
+  Eigen::Quaterniond q(m);
+  q.normalize();
+  return q.toRotationMatrix();
+}
+
+Mat3 rotation_from_quaternion(double x, double y, double z, double w) {
+  return Eigen::Quaterniond(w, x, y, z).normalized().toRotationMatrix();
+}
+
+Eigen::Vector4d quaternion_from_rotation(const Mat3& R) {
+  Eigen::Quaterniond q(R);
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  return Eigen::Vector4d(q.x(), q.y(), q.z(), q.w());
+}
+
+}  // namespace se3
