@@ -39,8 +39,16 @@ struct Data {
   VecX nle;   ///< bias H (nv)
   MatX M;     ///< crba output (nv x nv, both triangles)
   MatX Minv;  ///< minv output (nv x nv, both triangles)
-  // scratch for minv (eqs. 58-63): 6 x nv blocks per body
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> Fm, Pm;
+  std::vector<Vec6> S;           ///< joint axes in the world frame (crba, minv)
+  /// crba: world-frame joint axes, one row per twist component, so a row of D is six axpys.
+  Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> Jrow;
+  /// minv (eqs. 58-63): world-frame bias wrenches of all columns (subtrees are disjoint column
+  /// ranges, so one 6 x nv block holds them all) and the acceleration blocks of the forward pass.
+  Eigen::Matrix<double, 6, Eigen::Dynamic> Fm;
+  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> Pm;
+  std::vector<int> P_slot;
+  /// First body of the run of consecutive-index ancestors ending at j (crba's row segments).
+  std::vector<int> run_start;
 };
 
 /// Positions of every body: Xup and oMb (the product of exponentials, section 5).
