@@ -134,13 +134,14 @@ class Renderer {
   Framebuffer& framebuffer() { return fb_; }
   /// Sky and ground colours of pixel row y at column x as draw_background() paints them.
   uint32_t background(int x, int y) const;
+  /// Whether draw_background() painted pixel (x, y) as ground (else sky).
+  bool ground_at(int x, int y) const;
   /// Writes the current frame as PNG; false (and *error) on failure.
   bool write_png(const std::string& path, std::string* error = nullptr) const;
 
  private:
   struct Mesh;
-  void draw_mesh(const Mesh& mesh, const SE3& pose, const Vec3& scale,
-                 const Eigen::Vector3d& rgb);
+  void draw_mesh(const Mesh& mesh, const SE3& pose, const Vec3& scale, const Eigen::Vector3d& rgb);
   void draw_triangle_clip(const Vec4& a, const Vec4& b, const Vec4& c, uint32_t color);
 
   struct RowBackground {

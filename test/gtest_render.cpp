@@ -1,0 +1,404 @@
+// Renderer: projection in RP^3, vanishing points, clipping at the near plane, the horizon,
+// rasterized coverage, mesh stand-ins and PNG output.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "se3_sim/render.h"
+
+using namespace se3;
+using namespace se3::render;
+
+namespace {
+
+Camera level_camera() {
+  Camera c;
+  c.width = 1280;
+  c.height = 1024;
+  c.focal_px = 1000;
+  c.eye = Vec3(0, -5, 1);
+  c.target = Vec3(0, 0, 1);
+  c.update();
+  return c;
+}
+
+void make_plain(Renderer& r) {
+  r.style().grid = false;
+  r.style().overlay = false;
+}
+
+}  // namespace
+
+TEST(RenderCamera, KnownPointLandsOnItsPixel) {
+  const Camera c = level_camera();
+  // Camera frame: x right = world x, y down = -world z, z forward = world y; depth 5.
+  Vec2 px;
+  double iz = 0;
+  ASSERT_TRUE(c.project(Vec3(1.0, 0.0, 1.5), px, &iz));
+  EXPECT_NEAR(px.x(), 640 + 1000 * 1.0 / 5, 1e-9);
+  EXPECT_NEAR(px.y(), 512 - 1000 * 0.5 / 5, 1e-9);
+  EXPECT_NEAR(iz, 1.0 / 5, 1e-12);
+  EXPECT_FALSE(c.project(Vec3(0, -6, 1), px));  // behind the eye
+
+  // A general camera, against a construction by hand.
+  Camera g;
+  g.eye = Vec3(3, -2, 1.5);
+  g.target = Vec3(0.2, 0.3, 0.4);
+  g.focal_px = 800;
+  g.update();
+  const Vec3 f = (g.target - g.eye).normalized();
+  const Vec3 right = f.cross(Vec3::UnitZ()).normalized();
+  const Vec3 down = f.cross(right);
+  const Vec3 x = g.target + 0.3 * right - 0.2 * down + 0.5 * f;
+  const double depth = (g.target - g.eye).norm() + 0.5;
+  ASSERT_TRUE(g.project(x, px));
+  EXPECT_NEAR(px.x(), 640 + 800 * 0.3 / depth, 1e-9);
+  EXPECT_NEAR(px.y(), 512 - 800 * 0.2 / depth, 1e-9);
+
+  // The rendered point marker covers that pixel.
+  Renderer r(c);
+  make_plain(r);
+  r.draw_background();
+  Marker m;
+  m.type = Marker::Type::Point;
+  m.a = Vec3(1.0, 0.0, 1.5);
+  m.size = 6;
+  m.color = Eigen::Vector3d(1, 0, 0);
+  r.draw_marker(m);
+  const Rgb p = r.framebuffer().rgb(840, 412);
+  EXPECT_EQ(p.r, 255);
+  EXPECT_EQ(p.g, 0);
+  EXPECT_EQ(p.b, 0);
+  EXPECT_EQ(r.framebuffer().pixel(860, 412), r.background(860, 412));
+}
+
+TEST(RenderCamera, VanishingPointIsTheImageOfThePointAtInfinity) {
+  Camera c;
+  c.eye = Vec3(2.5, -3.0, 1.7);
+  c.target = Vec3(0, 0.5, 0.3);
+  c.update();
+  const Vec3 d = Vec3(1.0, 2.0, 0.3).normalized();
+  const Eigen::Vector3d vp = c.vanishing_point(d);  // projection of (d, 0), s = 0
+  ASSERT_GT(vp.z(), 0);
+  const Vec2 v(vp.x() / vp.z(), vp.y() / vp.z());
+  const Vec3 starts[] = {Vec3(0, 0, 0), Vec3(1, -1, 0.5), Vec3(-2, 0.3, 1.2), Vec3(0.4, 2, -1)};
+  for (const Vec3& p : starts) {
+    // Far along the line the image tends to the vanishing point ...
+    Vec2 far;
+    ASSERT_TRUE(c.project(p + 1e9 * d, far));
+    EXPECT_NEAR((far - v).norm(), 0, 1e-3);
+    // ... and the image of the whole line passes through it.
+    Vec2 a, b;
+    ASSERT_TRUE(c.project(p, a));
+    ASSERT_TRUE(c.project(p + 0.5 * d, b));
+    const double cross = (b - a).x() * (v - a).y() - (b - a).y() * (v - a).x();
+    EXPECT_NEAR(cross / ((b - a).norm() * (v - a).norm()), 0, 1e-9);
+  }
+  // The ground families' vanishing points lie on the horizon, where viewing rays are level.
+  const Eigen::Vector3d l = c.horizon_line();
+  for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(-3, 1, 0)}) {
+    const Eigen::Vector3d w = c.vanishing_point(dir);
+    EXPECT_NEAR(l.dot(w) / (l.norm() * w.norm()), 0, 1e-12);
+  }
+  const double u = 100, vh = -(l.x() * u + l.z()) / l.y();
+  EXPECT_NEAR(c.ray(u, vh).z(), 0, 1e-12);
+  EXPECT_LT(c.ray(u, vh + 10).z(), 0);  // below the horizon the ray goes down
+}
+
+TEST(RenderClip, SegmentThroughTheEyePlaneIsClippedNotWrapped) {
+  const Camera c = level_camera();
+  // In camera coordinates A = (-0.5, 0, 2) is in front, B = (1.5, 0, -2) behind the eye. The
+  // visible part runs from A's pixel (u = 390) to the right, off the image; a wrapped line
+  // would run left from u = 390 towards B's naive image u = 640 - 750.
+  const Vec4 A(-0.5, -3, 1, 1), B(1.5, -7, 1, 1);
+  Vec4 ca = c.clip(A), cb = c.clip(B);
+  ASSERT_LT(cb.w(), 0);
+  ASSERT_TRUE(clip_segment(ClipPlanes(c), ca, cb));
+  EXPECT_GE(ca.w(), c.near - 1e-12);
+  EXPECT_GE(cb.w(), c.near - 1e-12);
+  EXPECT_NEAR(ca.x() / ca.w(), 390, 1e-9);
+  EXPECT_GT(cb.x() / cb.w(), 1280);
+
+  Renderer r(c);
+  make_plain(r);
+  r.draw_background();
+  r.draw_segment(A, B, Rgb(255, 0, 0), 2.0f, false);
+  int changed = 0, right_edge = 0, min_x = 1 << 30;
+  for (int y = 0; y < 1024; ++y)
+    for (int x = 0; x < 1280; ++x)
+      if (r.framebuffer().pixel(x, y) != r.background(x, y)) {
+        ++changed;
+        min_x = std::min(min_x, x);
+        if (x >= 1275) ++right_edge;
+        EXPECT_NEAR(y, 512, 3);
+      }
+  EXPECT_GT(changed, 800);
+  EXPECT_GE(min_x, 388);
+  EXPECT_GT(right_edge, 0);
+
+  // Entirely behind the eye: nothing at all.
+  Vec4 a2 = c.clip(Vec4(0, -6, 1, 1)), b2 = c.clip(Vec4(1, -8, 2, 1));
+  EXPECT_FALSE(clip_segment(ClipPlanes(c), a2, b2));
+}
+
+TEST(RenderPainter, HorizonRowWhereTheCameraSays) {
+  Camera c;
+  c.eye = Vec3(0, -6, 2);
+  c.target = Vec3(0, 0, 1);  // looking down by atan(1/6)
+  c.update();
+  const double vh = 512 - 1000 * std::tan(std::atan(1.0 / 6.0));  // 345.33
+  const Eigen::Vector3d l = c.horizon_line();
+  for (double u : {0.0, 640.0, 1279.0}) EXPECT_NEAR(-(l.x() * u + l.z()) / l.y(), vh, 1e-9);
+
+  Renderer r(c);
+  make_plain(r);
+  r.draw_background();
+  const int row = int(std::ceil(vh - 0.5));  // first row whose centre is below the horizon
+  for (int x : {5, 640, 1270}) {
+    // The sharpest change of colour down a column is at the horizon.
+    int best = -1, best_d = -1;
+    for (int y = 1; y < 1024; ++y) {
+      const Rgb p = r.framebuffer().rgb(x, y - 1), q = r.framebuffer().rgb(x, y);
+      const int d = std::abs(p.r - q.r) + std::abs(p.g - q.g) + std::abs(p.b - q.b);
+      if (d > best_d) best_d = d, best = y;
+    }
+    EXPECT_EQ(best, row);
+    EXPECT_GT(best_d, 30);
+  }
+  // A rolled camera: the ground side of every pixel agrees with its viewing ray.
+  Camera rolled = c;
+  rolled.up = Vec3(0.3, 0, 1);
+  rolled.update();
+  Renderer rr(rolled);
+  make_plain(rr);
+  rr.draw_background();
+  for (int y = 8; y < 1024; y += 37)
+    for (int x = 3; x < 1280; x += 41) {
+      const double z = rolled.ray(x + 0.5, y + 0.5).z();
+      if (std::abs(z) < 2e-3) continue;
+      const uint32_t bg = rr.background(x, y);
+      const uint32_t px = rr.framebuffer().pixel(x, y);
+      EXPECT_EQ(px, bg);
+      // The ground is painted exactly where the viewing ray goes down.
+      EXPECT_EQ(rr.ground_at(x, y), z < 0) << x << "," << y;
+    }
+}
+
+TEST(RenderPainter, GridLinesRunToTheVanishingPoints) {
+  Camera c;
+  c.eye = Vec3(1.0, -4.0, 1.5);
+  c.target = Vec3(0.5, 0, 0.5);
+  c.update();
+  Renderer r(c);
+  r.style().overlay = false;
+  r.draw_background();
+  r.draw_grid();
+  // Near the vanishing point of the e_y family (in the image), grid pixels are present.
+  const Eigen::Vector3d w = c.vanishing_point(Vec3(0, 1, 0));
+  ASSERT_GT(w.z(), 0);
+  const int u = int(w.x() / w.z()), v = int(w.y() / w.z());
+  ASSERT_TRUE(u > 20 && u < 1260 && v > 20 && v < 1000);
+  int changed = 0;
+  for (int y = v + 1; y < v + 12; ++y)
+    for (int x = u - 15; x <= u + 15; ++x)
+      changed += r.framebuffer().pixel(x, y) != r.background(x, y);
+  EXPECT_GT(changed, 10);
+  // Nothing drawn above the horizon (sky stays untouched).
+  for (int x = 0; x < 1280; x += 7) EXPECT_EQ(r.framebuffer().pixel(x, 3), r.background(x, 3));
+}
+
+TEST(RenderRaster, BoxCoversExpectedPixelsAndBackgroundElsewhere) {
+  const Camera c = level_camera();
+  Renderer r(c);
+  make_plain(r);
+  r.draw_background();
+  r.draw_box(SE3(Mat3::Identity(), Vec3(0, 0, 1)), Vec3(1, 1, 1), Eigen::Vector3d(0.9, 0.1, 0.1));
+  // Front face at depth 4.5: a square of half side 1000 * 0.5 / 4.5 = 111.1 px.
+  const double h = 1000 * 0.5 / 4.5;
+  int inside = 0;
+  for (int y = 0; y < 1024; y += 3)
+    for (int x = 0; x < 1280; x += 3) {
+      const double dx = std::abs(x + 0.5 - 640), dy = std::abs(y + 0.5 - 512);
+      const uint32_t p = r.framebuffer().pixel(x, y);
+      if (dx < h - 1 && dy < h - 1) {
+        const Rgb q = r.framebuffer().rgb(x, y);
+        EXPECT_GT(int(q.r), int(q.g) + 60) << x << "," << y;
+        ++inside;
+      } else if (dx > h + 1 || dy > h + 1) {
+        ASSERT_EQ(p, r.background(x, y)) << x << "," << y;
+      }
+    }
+  EXPECT_GT(inside, 5000);
+  // The depth buffer holds 1 / 4.5 on the front face.
+  EXPECT_NEAR(r.framebuffer().depth()[512 * 1280 + 640], 1 / 4.5, 1e-5);
+
+  // A nearer box in front wins the depth test, whatever the drawing order.
+  r.draw_box(SE3(Mat3::Identity(), Vec3(0, -2, 1)), Vec3(0.2, 0.2, 0.2),
+             Eigen::Vector3d(0.1, 0.1, 0.9));
+  r.draw_box(SE3(Mat3::Identity(), Vec3(0, 0, 1)), Vec3(1, 1, 1), Eigen::Vector3d(0.9, 0.1, 0.1));
+  const Rgb q = r.framebuffer().rgb(640, 512);
+  EXPECT_GT(int(q.b), int(q.r) + 60);
+}
+
+namespace {
+
+// Base box + one revolute body whose visual is a mesh (no collision): its stand-in runs from
+// the body origin to the child's joint.
+Model two_body_model() {
+  Model m;
+  m.n = 2;
+  m.nv = 2;
+  m.parent = {-1, 0, 1};
+  m.joint_type = {JointType::Revolute, JointType::Revolute, JointType::Revolute};
+  m.X_tree = {SE3(), SE3(Mat3::Identity(), Vec3(0, 0, 0.2)),
+              SE3(Mat3::Identity(), Vec3(0, 0, 0.5))};
+  m.inertia.assign(3, Inertia::from_com(1.0, Vec3::Zero(), Mat3::Identity() * 0.01));
+  m.body_name = {"base", "arm", "tip"};
+  m.joint_name = {"", "j1", "j2"};
+  m.lower.assign(3, -1e9);
+  m.upper.assign(3, 1e9);
+  m.effort.assign(3, 1e9);
+  m.velocity.assign(3, 1e9);
+  m.damping.assign(3, 0);
+  m.friction.assign(3, 0);
+  m.links = {{"base", 0, SE3()}, {"arm", 1, SE3()}, {"tip", 2, SE3()}};
+  Geometry box;
+  box.type = GeometryType::Box;
+  box.size = Vec3(0.3, 0.3, 0.1);
+  box.link = "base";
+  Geometry mesh;
+  mesh.type = GeometryType::Mesh;
+  mesh.mesh = "arm.dae";
+  mesh.link = "arm";
+  m.visuals = {box, mesh};
+  m.visual_body = {0, 1};
+  m.finalize();
+  return m;
+}
+
+}  // namespace
+
+TEST(RenderScene, MeshStandInsAndModelPixels) {
+  const Model m = two_body_model();
+  const auto items = make_draw_items(m);
+  ASSERT_GE(items.size(), 3u);
+  EXPECT_EQ(items[0].shape, DrawItem::Shape::Box);
+  bool segment = false;
+  for (const auto& it : items)
+    if (it.body == 1 && it.shape == DrawItem::Shape::Cylinder &&
+        std::abs(it.size.z() - 0.5) < 1e-12) {
+      segment = true;
+      EXPECT_TRUE(it.local.p.isApprox(Vec3(0, 0, 0.25)));
+      EXPECT_NEAR(std::abs(it.local.R.col(2).z()), 1.0, 1e-12);
+    }
+  EXPECT_TRUE(segment);
+
+  // Poses by hand (body 1 at 0.2 m, body 2 at 0.7 m above the base).
+  std::vector<SE3> oMb = {SE3(), SE3(Mat3::Identity(), Vec3(0, 0, 0.2)),
+                          SE3(Mat3::Identity(), Vec3(0, 0, 0.7))};
+  Camera c;
+  c.eye = Vec3(0, -3, 0.5);
+  c.target = Vec3(0, 0, 0.5);
+  c.update();
+  Renderer r(c);
+  make_plain(r);
+  r.set_model(m);
+  r.render(oMb);
+  Vec2 px;
+  ASSERT_TRUE(c.project(Vec3(0, 0, 0.45), px));  // the middle of the arm's stand-in
+  EXPECT_NE(r.framebuffer().pixel(int(px.x()), int(px.y())),
+            r.background(int(px.x()), int(px.y())));
+  ASSERT_TRUE(c.project(Vec3(0.5, 0, 0.45), px));  // beside it: background (sky or ground)
+  EXPECT_EQ(r.framebuffer().pixel(int(px.x()), int(px.y())),
+            r.background(int(px.x()), int(px.y())));
+
+  // Non-finite poses hide their bodies and never poison the image.
+  oMb[1].p.x() = std::nan("");
+  r.style().frames = true;
+  Overlay ov;
+  ov.sim_time = 1.5;
+  ov.real_time_factor = 0.98;
+  ov.joint = "j1";
+  ov.torque = -2.5;
+  r.style().overlay = true;
+  r.render(oMb, {}, ov);
+  ASSERT_TRUE(c.project(Vec3(0, 0, 0.45), px));
+  EXPECT_EQ(r.framebuffer().pixel(int(px.x()), int(px.y())),
+            r.background(int(px.x()), int(px.y())));
+  // The overlay wrote text into the top-left corner.
+  int text = 0;
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 300; ++x) text += r.framebuffer().pixel(x, y) != r.background(x, y);
+  EXPECT_GT(text, 100);
+}
+
+TEST(RenderScene, MarkersAndOrbit) {
+  Camera c = level_camera();
+  Renderer r(c);
+  make_plain(r);
+  r.draw_background();
+  Marker arrow;
+  arrow.type = Marker::Type::Arrow;
+  arrow.a = Vec3(-0.5, 0, 1);
+  arrow.b = Vec3(0.5, 0, 1);
+  arrow.size = 0.05;
+  arrow.color = Eigen::Vector3d(0, 1, 0);
+  r.draw_marker(arrow);
+  EXPECT_NE(r.framebuffer().pixel(640, 512), r.background(640, 512));
+  EXPECT_EQ(r.framebuffer().pixel(640, 600), r.background(640, 600));
+  Marker bad = arrow;
+  bad.b.x() = std::nan("");
+  r.draw_marker(bad);  // ignored
+
+  const double d0 = (c.eye - c.target).norm();
+  c.orbit(0.5, 0.2, 0.5);
+  EXPECT_NEAR((c.eye - c.target).norm(), 0.5 * d0, 1e-9);
+  c.orbit(std::nan(""), 10.0, std::nan(""));  // pitch clamps, NaN ignored
+  EXPECT_TRUE(c.eye.allFinite());
+  EXPECT_LT(std::asin((c.eye - c.target).normalized().z()), 89.01 * M_PI / 180);
+  EXPECT_TRUE(c.P.allFinite());
+}
+
+TEST(RenderScene, CameraSpecAndPngOfARealRobot) {
+  RenderOptions opt;
+  std::string err;
+  EXPECT_FALSE(parse_camera_spec("1,2,3", opt, &err));
+  EXPECT_FALSE(parse_camera_spec("1,2,x,0,0,0", opt, &err));
+  EXPECT_FALSE(parse_camera_spec("1,1,1,1,1,1", opt, &err));
+  EXPECT_TRUE(opt.auto_camera);
+  ASSERT_TRUE(parse_camera_spec("3,-2,1.5,0,0,0.5,900", opt, &err)) << err;
+  EXPECT_FALSE(opt.auto_camera);
+  EXPECT_EQ(opt.camera.focal_px, 900);
+
+  Model m;
+  try {
+    m = model_from_urdf_file(std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf");
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << "URDF loader not available: " << e.what();
+  }
+  RenderOptions o;
+  o.q = VecX::Zero(m.n);
+  if (m.n >= 7) {
+    o.q(1) = -0.6;
+    o.q(3) = -2.2;
+    o.q(5) = 1.6;
+  }
+  const std::string out = ::testing::TempDir() + "se3_render_panda.png";
+  std::remove(out.c_str());
+  ASSERT_EQ(render_to_png(m, o, out, &err), 0) << err;
+  std::ifstream f(out, std::ios::binary);
+  char sig[8] = {};
+  f.read(sig, 8);
+  EXPECT_EQ(std::string(sig + 1, 3), "PNG");
+  EXPECT_EQ(render_to_png(m, o, "/nonexistent-dir/x.png", &err), 1);
+  EXPECT_FALSE(err.empty());
+  o.q = VecX::Zero(m.n + 1);
+  EXPECT_EQ(render_to_png(m, o, out, &err), 1);
+}
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
