@@ -398,6 +398,23 @@ TEST(RenderScene, CameraSpecAndPngOfARealRobot) {
   EXPECT_EQ(render_to_png(m, o, out, &err), 1);
 }
 
+TEST(RenderRaster, Rgb8CopyMatchesThePixels) {
+  Framebuffer fb(37, 5);  // odd sizes exercise the tail of the fast copy
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 37; ++x)
+      fb.fill_span(y, x, x + 1, Rgb(uint8_t(x * 7), uint8_t(y * 50), uint8_t(x + y)).packed());
+  std::vector<uint8_t> out(37 * 5 * 3 + 1, 0xab);
+  fb.copy_rgb8(out.data());
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 37; ++x) {
+      const size_t i = 3 * (size_t(y) * 37 + x);
+      EXPECT_EQ(out[i], x * 7);
+      EXPECT_EQ(out[i + 1], y * 50);
+      EXPECT_EQ(out[i + 2], x + y);
+    }
+  EXPECT_EQ(out.back(), 0xab);  // nothing written past the end
+}
+
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -68,7 +68,7 @@ struct Overlay {
 struct Style {
   bool grid = true;
   double grid_spacing = 0.5;  ///< metres between grid lines
-  int grid_lines = 40;        ///< lines of each family on each side of the origin
+  int grid_lines = 20;        ///< lines of each family on each side of the origin
   bool frames = false;        ///< link frames as short axes
   double frame_length = 0.1;  ///< metres
   bool overlay = true;
@@ -151,6 +151,7 @@ class Renderer {
   };
 
   Camera cam_;
+  ClipPlanes planes_{cam_};
   Style style_;
   std::vector<RowBackground> rows_;
   Framebuffer fb_;

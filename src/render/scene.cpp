@@ -29,8 +29,8 @@ bool finite_pose(const SE3& f) {
 // Unit shapes centred at the origin: box [-0.5, 0.5]^3, cylinder of radius 0.5 and length 1
 // along z, sphere of radius 0.5, cone of base radius 0.5 at z = 0 and apex at z = 1.
 
-constexpr int kCylSeg = 28;
-constexpr int kSphLat = 12, kSphLon = 24;
+constexpr int kCylSeg = 24;
+constexpr int kSphLat = 9, kSphLon = 18;
 
 template <class M>
 void box_mesh(M& m) {
@@ -283,6 +283,7 @@ Renderer::Renderer(const Camera& cam)
   world_scratch_.resize(nmax);
   cam_ = cam;
   cam_.update();
+  planes_ = ClipPlanes(cam_);
   fb_.resize(cam_.width, cam_.height);
   rows_.resize(cam_.height);
   make_cairo();
@@ -313,6 +314,7 @@ void Renderer::set_camera(const Camera& cam) {
   c.update();
   const bool resized = c.width != fb_.width() || c.height != fb_.height();
   cam_ = c;
+  planes_ = ClipPlanes(cam_);
   if (resized) {
     free_cairo();
     fb_.resize(cam_.width, cam_.height);
@@ -416,7 +418,7 @@ void Renderer::draw_grid() {
 
 void Renderer::draw_segment(const Vec4& a, const Vec4& b, Rgb color, float width, bool depth_test,
                             float opacity, float fade) {
-  const ClipPlanes planes(cam_);
+  const ClipPlanes& planes = planes_;
   Vec4 ca = cam_.clip(a), cb = cam_.clip(b);
   if (!clip_segment(planes, ca, cb)) return;
   const ScreenVertex sa{float(ca.x() / ca.w()), float(ca.y() / ca.w()), float(ca.z() / ca.w())};
@@ -425,7 +427,7 @@ void Renderer::draw_segment(const Vec4& a, const Vec4& b, Rgb color, float width
 }
 
 void Renderer::draw_triangle_clip(const Vec4& a, const Vec4& b, const Vec4& c, uint32_t color) {
-  const ClipPlanes planes(cam_);
+  const ClipPlanes& planes = planes_;
   const Vec4 in[3] = {a, b, c};
   Vec4 out[16];
   int n;
