@@ -1,0 +1,131 @@
+// Time steppers on the Lie-group state of a free-floating (or fixed-base) tree.
+//
+// The state is the base pose f0 in SE(3), the joint positions q and the generalized velocity
+// v = [V0; qdot] (V0 the base twist in the base frame; no V0 for a fixed base), as in
+// dynamics.h. The base pose is integrated on SE(3) itself, f <- f exp(h xi), never through
+// coordinates, so no orientation is singular.
+//
+// Runge-Kutta-Munthe-Kaas (RKMK): near f_n the base is written f(t) = f_n exp(xi(t)) with
+// xi(0) = 0; since f^-1 fdot = hat(dexp(-xi) xidot) (lie.h), the local coordinate obeys
+// xidot = dexp_inv(-xi) V0, an ODE on the vector space se(3) that any explicit Runge-Kutta
+// tableau integrates together with q and v. The step ends with f_{n+1} = f_n exp(xi_{n+1}).
+//
+// Forces during a step: gravity (Model::gravity), the commanded generalized force tau_cmd
+// (size nv: for a free base a wrench [N; F] on the base, in its frame, first; then the joint
+// efforts, already clamped by the caller) and the passive joint forces of the model, evaluated
+// at every stage: damping -d qdot and regularized Coulomb friction -f tanh(qdot / eps).
+//
+// A stepper owns its workspace (one dynamics Data and the stage vectors), sized once for its
+// model: step() allocates nothing. The model must outlive the stepper.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "se3_sim/dynamics.h"
+
+namespace se3 {
+
+/// The simulated state. q has n entries, v has nv (see dynamics.h).
+struct State {
+  SE3 base;
+  VecX q;
+  VecX v;
+
+  State() = default;
+  /// Zero state of the right sizes (base at the identity).
+  explicit State(const Model& model);
+  /// Every number finite and the base rotation orthonormal to 1e-6.
+  bool finite() const;
+};
+
+struct StepperOptions {
+  /// Error tolerance of adaptive steppers (absolute and relative, per component).
+  double tol = 1e-6;
+  /// Smallest internal step of adaptive steppers; below it the step fails.
+  double h_min = 1e-10;
+  /// Most internal steps (accepted + rejected) an adaptive stepper takes to cover one step().
+  int max_substeps = 100000;
+  /// Regularization speed of Coulomb friction: f tanh(qdot / eps) (rad/s or m/s).
+  double friction_eps = 1e-2;
+  /// Apply the model's joint damping and friction.
+  bool passive_forces = true;
+};
+
+struct StepInfo {
+  bool ok = true;
+  int evaluations = 0;  ///< dynamics (ABA) calls
+  int substeps = 0;     ///< accepted internal steps (1 for fixed-step methods)
+  int rejected = 0;     ///< rejected internal steps (adaptive only)
+  std::string reason;   ///< why the step failed (ok == false); the state is then unchanged
+};
+
+class Stepper {
+ public:
+  Stepper(const Model& model, const StepperOptions& opt);
+  virtual ~Stepper() = default;
+  Stepper(const Stepper&) = delete;
+  Stepper& operator=(const Stepper&) = delete;
+
+  /// Registry name, e.g. "rkmk4".
+  virtual std::string name() const = 0;
+  /// Order of accuracy (global error O(h^order)).
+  virtual int order() const = 0;
+  virtual bool adaptive() const { return false; }
+  /// Advances x by exactly h under tau_cmd (size nv). An adaptive stepper covers h with as many
+  /// internal steps as its tolerance needs and remembers the internal step size across calls.
+  /// On failure (ok == false) x is left as it was.
+  virtual StepInfo step(State& x, const VecX& tau_cmd, double h) = 0;
+  /// Forgets what is carried between calls (adaptive step size, cached last evaluation).
+  virtual void restart() {}
+
+  /// The generalized acceleration at x under tau_cmd plus the passive forces (one ABA call).
+  const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v, const VecX& tau_cmd);
+  /// The passive joint forces at joint rates v (size nv, zero on the base part), into out.
+  void passive_forces(const VecX& v, VecX& out) const;
+
+  const Model& model() const { return model_; }
+  const StepperOptions& options() const { return opt_; }
+  Data& data() { return data_; }
+
+ protected:
+  const Model& model_;
+  StepperOptions opt_;
+  Data data_;
+  VecX tau_;  ///< total generalized force of the current evaluation
+};
+
+/// Creates a stepper by name for model. Throws std::invalid_argument naming the known ones.
+using StepperFactory = std::function<std::unique_ptr<Stepper>(const Model&, const StepperOptions&)>;
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const Model& model,
+                                      const StepperOptions& opt = {});
+/// Adds (or replaces) a stepper in the registry. Built in: euler, symplectic_euler, rkmk4,
+/// rkmk45 (Dormand-Prince 5(4), adaptive).
+void register_stepper(const std::string& name, const std::string& description,
+                      StepperFactory factory);
+/// Registered names, sorted.
+std::vector<std::string> stepper_names();
+/// One-line description of a registered stepper ("" when unknown).
+std::string stepper_description(const std::string& name);
+
+/// An explicit Runge-Kutta tableau (row i of a holds a_ij for j < i). With b_err non-empty the
+/// method is an embedded pair: b_err = b - b_hat estimates the local error of the lower order.
+struct ButcherTableau {
+  std::string name;
+  int order = 1;
+  std::vector<std::vector<double>> a;
+  std::vector<double> b;
+  std::vector<double> b_err;
+  /// First-same-as-last: the last stage is evaluated at the step's end point.
+  bool fsal = false;
+};
+ButcherTableau tableau_rk4();
+ButcherTableau tableau_dormand_prince45();
+
+/// The RKMK stepper for any explicit tableau (fixed step, or adaptive with b_err).
+std::unique_ptr<Stepper> make_rkmk_stepper(const ButcherTableau& tableau, const Model& model,
+                                           const StepperOptions& opt);
+
+}  // namespace se3

@@ -1,0 +1,222 @@
+// The simulation layer (no roscpp): scenes from YAML, a Simulator with commands, passive joint
+// forces, effort limits and a divergence guard, and the headless run behind `se3_dyn simulate`.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "se3_sim/integrate.h"
+
+namespace se3 {
+
+/// Thrown for a scene file that cannot be used; the message names the file, line and key.
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A scene (config/scenes/*.yaml). Keys, all optional except robot:
+///   name: text                      robot: data/robots/panda.urdf | chain:N
+///   base: free | fixed              base_pose: {position: [x,y,z], orientation: [x,y,z,w]}
+///   base_twist: [wx,wy,wz,vx,vy,vz] (base frame; free base only)
+///   base_inertia: {mass: m, com: [x,y,z], inertia: [ixx,iyy,izz(,ixy,ixz,iyz)]}
+///       a rigid body added to the base link (e.g. a satellite bus), inertia about its com
+///   initial_positions: {joint: value, ...}   initial_velocities: {joint: value, ...}
+///   locked_joints: {joint: value, ...}       (treated as fixed at that value)
+///   gravity: [gx,gy,gz]             integrator: rkmk4     dt: 0.001    tol: 1e-6
+///   real_time_factor: 1.0           publish_rate: 100     friction_eps: 0.01
+///   chain: {length: 0.3, masses: [1.0]}      (for robot: chain:N)
+/// A relative robot path is looked up next to the scene file, then under the package root
+/// (the nearest directory above the scene holding package.xml).
+struct Scene {
+  std::string file;  ///< the scene file ("" when parsed from text)
+  std::string name;
+  std::string robot;       ///< as written
+  std::string robot_path;  ///< resolved file, or "chain:N"
+  bool floating = true;
+  bool has_base_inertia = false;
+  double base_mass = 0;
+  Vec3 base_com = Vec3::Zero();
+  Mat3 base_inertia = Mat3::Zero();  ///< about base_com, base link axes
+  SE3 base_pose;
+  Vec6 base_twist = Vec6::Zero();
+  std::vector<std::pair<std::string, double>> initial_positions;
+  std::vector<std::pair<std::string, double>> initial_velocities;
+  std::vector<std::pair<std::string, double>> locked_joints;
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  std::string integrator = "rkmk4";
+  double dt = 1e-3;
+  double tol = 1e-6;
+  double real_time_factor = 1.0;
+  double publish_rate = 100.0;
+  double friction_eps = 1e-2;
+  double chain_length = 0.3;
+  std::vector<double> chain_masses = {1.0};
+};
+
+/// Reads a scene file. Throws SceneError.
+Scene load_scene(const std::string& path);
+/// Parses scene text; relative robot paths are resolved against base_dir.
+Scene parse_scene(const std::string& text, const std::string& base_dir,
+                  const std::string& file_for_messages = "<scene>");
+
+/// The model a scene names: its robot (or urdf_xml when not empty, e.g. robot_description),
+/// base free or fixed, locked joints, base inertia and gravity. Throws ModelError/SceneError.
+Model scene_model(const Scene& scene, const std::string& urdf_xml = "");
+/// The scene's initial state for model (joint names not in the model are an error).
+State scene_state(const Scene& scene, const Model& model);
+/// A random state: joints uniform within their limits ([-pi, pi] when unlimited), joint rates
+/// and base twist uniform in [-1, 1], base at the identity. Fixed by seed.
+State random_state(const Model& model, unsigned seed);
+/// Minimal URDF text of a model (links, joints, inertials, box visuals), for robots that exist
+/// only in code (chain:N), so robot_description can be published.
+std::string model_to_urdf(const Model& model);
+
+struct GuardOptions {
+  /// |v| (any component, rad/s or m/s) above this is divergence.
+  double max_rate = 1e4;
+  /// Kinetic energy above energy_growth * E_ref is divergence, with
+  /// E_ref = max(T(0), m_total / 2 * 1 m^2/s^2) + m_total |g| * 1 m.
+  double energy_growth = 1e4;
+  /// Energy is checked every this many steps (finiteness and rates every step).
+  int energy_check_every = 8;
+};
+
+struct SimConfig {
+  std::string integrator = "rkmk4";
+  double dt = 1e-3;
+  StepperOptions stepper;
+  GuardOptions guard;
+};
+
+/// One simulated system: model, state, stepper, commands and the divergence guard.
+class Simulator {
+ public:
+  /// Throws std::invalid_argument for an unknown integrator or a bad dt.
+  Simulator(Model model, const State& initial, const SimConfig& config);
+
+  const Model& model() const { return *model_; }
+  const State& state() const { return state_; }
+  const SimConfig& config() const { return config_; }
+  double dt() const { return config_.dt; }
+  std::string integrator() const { return stepper_->name(); }
+  Stepper& stepper() { return *stepper_; }
+  /// Simulated time since the last reset.
+  double time() const { return time_; }
+  std::uint64_t steps() const { return steps_; }
+
+  // ---- commands (kept until changed)
+  /// Sets joint i's (1..n) commanded effort, clamped to its URDF effort limit (when that is
+  /// finite and positive). Returns the clamped value.
+  double set_joint_effort(int i, double effort);
+  /// Wrench on a free base (base frame, about its origin); ignored for a fixed base.
+  void set_base_wrench(const Vec6& wrench);
+  void clear_command();
+  /// The commanded generalized force (size nv).
+  const VecX& command() const { return command_; }
+  /// Joint efforts acting at the current state (size n): command plus damping and friction.
+  void applied_joint_efforts(VecX& out);
+
+  // ---- stepping
+  /// One step of dt. On divergence returns false, rolls the state back to the last good one
+  /// and keeps the reason in failure() until reset().
+  bool step();
+  /// Up to k steps; stops at the first failure. Returns the steps taken.
+  int step_n(int k);
+  const std::string& failure() const { return failure_; }
+  /// Back to the initial state, commands cleared, failure cleared, time 0.
+  void reset();
+  void set_initial_state(const State& s);
+  /// Replaces the current state (sizes must match). Throws std::invalid_argument otherwise.
+  void set_state(const State& s);
+  /// Changes the integrator or step size (state kept).
+  void set_integrator(const std::string& name);
+  void set_dt(double dt);
+  /// Sum of accepted internal steps, rejected steps and dynamics calls since reset.
+  std::uint64_t substeps() const { return substeps_; }
+  std::uint64_t rejected() const { return rejected_; }
+  std::uint64_t evaluations() const { return evaluations_; }
+
+  // ---- diagnostics (own workspace; not the stepper's)
+  double kinetic_energy();
+  /// Potential energy relative to the initial configuration.
+  double potential_energy();
+  /// Total spatial momentum, world frame.
+  Vec6 momentum();
+  Vec3 center_of_mass();
+  /// Initial kinetic energy (after the last reset).
+  double initial_kinetic_energy() const { return T0_; }
+  /// World pose of every entry of Model::links, into out (resized to links.size()).
+  void link_poses(std::vector<SE3>& out);
+  /// World pose of every body (after link_poses or center_of_mass; valid until the next call).
+  const std::vector<SE3>& body_poses() const { return diag_.oMb; }
+
+ private:
+  void refresh_reference();
+  bool check_rates(std::string& why) const;
+
+  std::unique_ptr<Model> model_;
+  SimConfig config_;
+  std::unique_ptr<Stepper> stepper_;
+  Data diag_;
+  State initial_, state_, last_good_, last_checked_;
+  VecX command_;
+  double time_ = 0, last_good_time_ = 0, last_checked_time_ = 0;
+  std::uint64_t steps_ = 0, substeps_ = 0, rejected_ = 0, evaluations_ = 0;
+  std::uint64_t last_good_steps_ = 0, last_checked_steps_ = 0;
+  std::string failure_;
+  double T0_ = 0, U0_ = 0, E_ref_ = 1;
+};
+
+/// Builds a simulator for a scene (urdf_xml as in scene_model).
+std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml = "");
+
+// ------------------------------------------------------------------ `se3_dyn simulate`
+/// Options of a headless run (the command line's `simulate`).
+struct SimulateOptions {
+  std::string model;            ///< MODEL.urdf or chain:N; used when scene is empty
+  bool floating = false;        ///< with model: free base
+  std::string scene;            ///< SCENE.yaml: robot, base, initial state, gravity, integrator, dt
+  std::string integrator;       ///< "" = the scene's, else rkmk4
+  double dt = 0;                ///< 0 = the scene's, else 0.001
+  double duration = 1.0;        ///< simulated seconds
+  double tol = 0;               ///< rkmk45 tolerance; 0 = the scene's, else 1e-6
+  unsigned seed = 1;            ///< random initial state (model runs, or random_initial)
+  bool random_initial = false;  ///< with a scene: random state instead of the scene's
+  bool has_gravity = false;     ///< override gravity with `gravity`
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  std::string out_csv;  ///< trajectory file ("" = none): t, base pose and twist, q:, v:, E
+};
+
+/// The figures `se3_dyn simulate --json` prints. NaN where a figure does not apply (print null).
+struct SimulateResult {
+  std::string integrator;
+  double dt = 0;
+  double sim_s = 0;   ///< simulated time reached
+  double wall_s = 0;  ///< wall time of the steps only (diagnostics and output excluded)
+  std::uint64_t steps = 0;
+  /// max |E(t) - E(0)| / T(0), potential measured from the initial configuration (damping and
+  /// friction count as drift). When T(0) = 0 the scale is max_t T(t) instead; NaN if still 0.
+  double energy_drift_rel = std::numeric_limits<double>::quiet_NaN();
+  /// max |h(t) - h(0)| / |h(0)| (world-frame spatial momentum); free base and zero gravity only.
+  double momentum_drift_rel = std::numeric_limits<double>::quiet_NaN();
+  /// Not yet applicable (no constraints in scenes): NaN.
+  double constraint_error_max = std::numeric_limits<double>::quiet_NaN();
+  /// max |c(t) - c(0)| of the centre of mass in m (free base and zero gravity; else NaN).
+  double com_drift_max = std::numeric_limits<double>::quiet_NaN();
+  std::uint64_t substeps = 0, rejected = 0, evaluations = 0;
+  bool diverged = false;
+  std::string status;  ///< the divergence reason ("" when the run completed)
+};
+
+/// Runs a scene or model headless with zero commanded torques. Throws SceneError, ModelError or
+/// std::invalid_argument on bad input; a divergence ends the run early with diverged = true.
+SimulateResult simulate_headless(const SimulateOptions& options);
+/// One-line JSON object of the DESIGN.md `simulate --json` keys (NaN printed as null).
+std::string simulate_result_json(const SimulateResult& r);
+
+}  // namespace se3

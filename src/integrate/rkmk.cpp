@@ -1,0 +1,289 @@
+// Runge-Kutta-Munthe-Kaas steppers for any explicit Butcher tableau (integrate.h).
+//
+// Stage i of a step from (f, q, v):
+//   xi_i = h sum_j a_ij Kxi_j,  q_i = q + h sum_j a_ij qdot_j,  v_i = v + h sum_j a_ij a_j
+//   f_i  = f exp(xi_i),         a_i = ABA(f_i, q_i, v_i),       Kxi_i = dexp_inv(-xi_i) V0_i
+// and the step ends at f exp(h sum_i b_i Kxi_i) with q and v combined by b. The joint part is
+// the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "se3_sim/integrate.h"
+
+namespace se3 {
+
+ButcherTableau tableau_rk4() {
+  ButcherTableau t;
+  t.name = "rkmk4";
+  t.order = 4;
+  t.a = {{}, {0.5}, {0.0, 0.5}, {0.0, 0.0, 1.0}};
+  t.b = {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6};
+  return t;
+}
+
+ButcherTableau tableau_dormand_prince45() {
+  ButcherTableau t;
+  t.name = "rkmk45";
+  t.order = 5;
+  t.a = {{},
+         {1.0 / 5},
+         {3.0 / 40, 9.0 / 40},
+         {44.0 / 45, -56.0 / 15, 32.0 / 9},
+         {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+         {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
+         {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}};
+  t.b = {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84, 0.0};
+  const double bh[7] = {5179.0 / 57600,    0.0,          7571.0 / 16695, 393.0 / 640,
+                        -92097.0 / 339200, 187.0 / 2100, 1.0 / 40};
+  for (int i = 0; i < 7; ++i) t.b_err.push_back(t.b[i] - bh[i]);
+  t.fsal = true;
+  return t;
+}
+
+namespace {
+
+class RkmkStepper final : public Stepper {
+ public:
+  RkmkStepper(const ButcherTableau& tab, const Model& model, const StepperOptions& opt)
+      : Stepper(model, opt), tab_(tab), s_(static_cast<int>(tab.b.size())) {
+    if (s_ < 1 || static_cast<int>(tab_.a.size()) != s_) {
+      throw std::invalid_argument("tableau '" + tab_.name + "': a and b sizes differ");
+    }
+    for (int i = 0; i < s_; ++i) {
+      if (static_cast<int>(tab_.a[i].size()) > i) {
+        throw std::invalid_argument("tableau '" + tab_.name + "' is not explicit");
+      }
+    }
+    if (!tab_.b_err.empty() && static_cast<int>(tab_.b_err.size()) != s_) {
+      throw std::invalid_argument("tableau '" + tab_.name + "': b_err has the wrong size");
+    }
+    if (tab_.fsal) {
+      const auto& last = tab_.a[s_ - 1];
+      for (int j = 0; j < s_ - 1; ++j) {
+        const double aj = j < static_cast<int>(last.size()) ? last[j] : 0.0;
+        if (aj != tab_.b[j] || tab_.b[s_ - 1] != 0) {
+          throw std::invalid_argument("tableau '" + tab_.name + "' is not first-same-as-last");
+        }
+      }
+    }
+    if (adaptive() && !(opt_.tol > 0)) throw std::invalid_argument("tol must be positive");
+    kxi_.assign(s_, Vec6::Zero());
+    kv_.assign(s_, VecX::Zero(model.nv));
+    vs_.assign(s_, VecX::Zero(model.nv));
+    qi_ = VecX::Zero(model.n);
+    start_ = State(model);
+    trial_ = State(model);
+    cache_end_ = State(model);
+    cache_tau_ = VecX::Zero(model.nv);
+    err_q_ = VecX::Zero(model.n);
+    err_v_ = VecX::Zero(model.nv);
+  }
+
+  std::string name() const override { return tab_.name; }
+  int order() const override { return tab_.order; }
+  bool adaptive() const override { return !tab_.b_err.empty(); }
+  void restart() override {
+    h_suggest_ = 0;
+    cache_valid_ = false;
+  }
+
+  StepInfo step(State& x, const VecX& tau_cmd, double h) override {
+    StepInfo info;
+    if (!adaptive()) {
+      first_stage_known_ = false;
+      attempt(x, tau_cmd, h, trial_, info);
+      x.base = trial_.base;
+      x.q = trial_.q;
+      x.v = trial_.v;
+      info.substeps = 1;
+      return info;
+    }
+    return adaptive_step(x, tau_cmd, h);
+  }
+
+ private:
+  // One attempt of size h from x into y (y must not alias x). Returns the scaled RMS error
+  // norm (adaptive tableaus; 0 otherwise).
+  double attempt(const State& x, const VecX& tau, double h, State& y, StepInfo& info) {
+    const bool fl = model_.floating;
+    const int n = model_.n;
+    for (int i = 0; i < s_; ++i) {
+      if (i == 0 && first_stage_known_) continue;
+      Vec6 xi = Vec6::Zero();
+      VecX& vi = vs_[i];
+      vi = x.v;
+      qi_ = x.q;
+      const auto& ai = tab_.a[i];
+      for (int j = 0; j < static_cast<int>(ai.size()); ++j) {
+        const double c = h * ai[j];
+        if (c == 0) continue;
+        if (fl) xi.noalias() += c * kxi_[j];
+        qi_.noalias() += c * vs_[j].tail(n);
+        vi.noalias() += c * kv_[j];
+      }
+      if (fl && i > 0) {
+        const SE3 fi = x.base * exp_se3(xi);
+        kv_[i] = acceleration(fi, qi_, vi, tau);
+        kxi_[i].noalias() = dexp_inv_se3(-xi) * vi.head<6>();
+      } else {
+        kv_[i] = acceleration(x.base, qi_, vi, tau);
+        if (fl) kxi_[i] = vi.head<6>();
+      }
+      ++info.evaluations;
+    }
+    // Combine.
+    Vec6 xi = Vec6::Zero();
+    y.q = x.q;
+    y.v = x.v;
+    for (int i = 0; i < s_; ++i) {
+      const double c = h * tab_.b[i];
+      if (c == 0) continue;
+      if (fl) xi.noalias() += c * kxi_[i];
+      y.q.noalias() += c * vs_[i].tail(n);
+      y.v.noalias() += c * kv_[i];
+    }
+    y.base = x.base;
+    if (fl) {
+      y.base = x.base * exp_se3(xi);
+      y.base.R = orthonormalize(y.base.R);
+    }
+    if (tab_.b_err.empty()) return 0;
+    // Error estimate of the embedded pair, scaled per component by tol (1 + |y|).
+    Vec6 exi = Vec6::Zero();
+    err_q_.setZero();
+    err_v_.setZero();
+    for (int i = 0; i < s_; ++i) {
+      const double c = h * tab_.b_err[i];
+      if (c == 0) continue;
+      if (fl) exi.noalias() += c * kxi_[i];
+      err_q_.noalias() += c * vs_[i].tail(n);
+      err_v_.noalias() += c * kv_[i];
+    }
+    double sum = 0;
+    int count = 0;
+    const double tol = opt_.tol;
+    if (fl) {
+      for (int k = 0; k < 6; ++k) {
+        const double e = exi[k] / (tol * (1 + std::abs(xi[k])));
+        sum += e * e;
+      }
+      count += 6;
+    }
+    for (int k = 0; k < n; ++k) {
+      const double e = err_q_[k] / (tol * (1 + std::max(std::abs(x.q[k]), std::abs(y.q[k]))));
+      sum += e * e;
+    }
+    for (int k = 0; k < model_.nv; ++k) {
+      const double e = err_v_[k] / (tol * (1 + std::max(std::abs(x.v[k]), std::abs(y.v[k]))));
+      sum += e * e;
+    }
+    count += n + model_.nv;
+    return std::sqrt(sum / std::max(count, 1));
+  }
+
+  static bool same(const State& a, const State& b) {
+    return a.base.R == b.base.R && a.base.p == b.base.p && a.q == b.q && a.v == b.v;
+  }
+
+  // After an accepted FSAL step the last stage is the next step's first: at the end point
+  // xi = 0, so Kxi = V0 and the acceleration is the one just computed.
+  void shift_fsal(const State& y) {
+    std::swap(kv_[0], kv_[s_ - 1]);
+    std::swap(vs_[0], vs_[s_ - 1]);
+    if (model_.floating) kxi_[0] = y.v.head<6>();
+    first_stage_known_ = true;
+  }
+
+  StepInfo adaptive_step(State& x, const VecX& tau, double H) {
+    StepInfo info;
+    start_.base = x.base;
+    start_.q = x.q;
+    start_.v = x.v;
+    first_stage_known_ = tab_.fsal && cache_valid_ && same(x, cache_end_) && tau == cache_tau_;
+    cache_valid_ = false;
+    const double exponent = -1.0 / tab_.order;
+    double remaining = H;
+    double h = (h_suggest_ > 0) ? h_suggest_ : H;
+    while (remaining > 0) {
+      if (info.substeps + info.rejected >= opt_.max_substeps) {
+        info.ok = false;
+        info.reason = "adaptive step: more than " + std::to_string(opt_.max_substeps) +
+                      " internal steps for one step";
+        break;
+      }
+      bool truncated = false;
+      double ht = h;
+      if (ht >= remaining * (1 - 1e-9)) {
+        truncated = ht > remaining;
+        ht = remaining;
+      }
+      const double err = attempt(x, tau, ht, trial_, info);
+      if (std::isfinite(err) && err <= 1.0 && trial_.finite()) {
+        x.base = trial_.base;
+        x.q = trial_.q;
+        x.v = trial_.v;
+        remaining -= ht;
+        if (remaining < 1e-14 * H) remaining = 0;
+        ++info.substeps;
+        const double fac =
+            err > 0 ? std::min(5.0, std::max(0.2, 0.9 * std::pow(err, exponent))) : 5.0;
+        // A step shortened only to land on H says nothing against the longer suggestion.
+        h = truncated ? std::max(h, ht * fac) : ht * fac;
+        if (tab_.fsal) {
+          shift_fsal(x);
+        } else {
+          first_stage_known_ = false;
+        }
+      } else {
+        ++info.rejected;
+        const double fac = std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, exponent)) : 0.2;
+        h = ht * std::min(fac, 0.9);
+        first_stage_known_ = true;  // stage 1 sits at x, which has not moved
+        if (h < opt_.h_min) {
+          info.ok = false;
+          info.reason = "adaptive step size fell below h_min = " + std::to_string(opt_.h_min) +
+                        " (error " + std::to_string(err) + ")";
+          break;
+        }
+      }
+    }
+    if (!info.ok) {
+      x.base = start_.base;
+      x.q = start_.q;
+      x.v = start_.v;
+      h_suggest_ = 0;
+      first_stage_known_ = false;
+      return info;
+    }
+    h_suggest_ = h;
+    if (tab_.fsal && first_stage_known_) {
+      cache_end_.base = x.base;
+      cache_end_.q = x.q;
+      cache_end_.v = x.v;
+      cache_tau_ = tau;
+      cache_valid_ = true;
+    }
+    return info;
+  }
+
+  ButcherTableau tab_;
+  int s_;
+  std::vector<Vec6> kxi_;
+  std::vector<VecX> kv_, vs_;
+  VecX qi_, err_q_, err_v_;
+  State start_, trial_, cache_end_;
+  VecX cache_tau_;
+  bool first_stage_known_ = false;
+  bool cache_valid_ = false;
+  double h_suggest_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> make_rkmk_stepper(const ButcherTableau& tableau, const Model& model,
+                                           const StepperOptions& opt) {
+  return std::make_unique<RkmkStepper>(tableau, model, opt);
+}
+
+}  // namespace se3

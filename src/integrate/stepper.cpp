@@ -1,0 +1,179 @@
+// The stepper interface, the registry, and the two first-order methods.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "se3_sim/integrate.h"
+
+namespace se3 {
+
+State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
+
+bool State::finite() const {
+  if (!q.allFinite() || !v.allFinite() || !base.R.allFinite() || !base.p.allFinite()) {
+    return false;
+  }
+  return (base.R.transpose() * base.R - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-6;
+}
+
+Stepper::Stepper(const Model& model, const StepperOptions& opt)
+    : model_(model), opt_(opt), data_(model), tau_(VecX::Zero(model.nv)) {
+  if (!(opt_.friction_eps > 0)) throw std::invalid_argument("friction_eps must be positive");
+}
+
+namespace {
+
+// out += the passive joint forces at rates v: damping -d qdot, friction -f tanh(qdot / eps).
+void add_passive(const Model& model, const StepperOptions& opt, const VecX& v, VecX& out) {
+  if (!opt.passive_forces) return;
+  const int off = model.floating ? 6 : 0;
+  const double inv_eps = 1.0 / opt.friction_eps;
+  for (int i = 1; i <= model.n; ++i) {
+    const double d = model.damping[i], f = model.friction[i];
+    if (d == 0 && f == 0) continue;
+    const double qd = v[off + i - 1];
+    out[off + i - 1] -= d * qd + f * std::tanh(qd * inv_eps);
+  }
+}
+
+}  // namespace
+
+void Stepper::passive_forces(const VecX& v, VecX& out) const {
+  out.setZero();
+  add_passive(model_, opt_, v, out);
+}
+
+const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
+                                  const VecX& tau_cmd) {
+  tau_ = tau_cmd;
+  add_passive(model_, opt_, v, tau_);
+  return aba(model_, data_, base, q, v, tau_);
+}
+
+namespace {
+
+// Base update f <- f exp(h V0), kept orthonormal (rounding in long products of rotations).
+inline void advance_base(SE3& f, const Vec6& xi) {
+  f = f * exp_se3(xi);
+  f.R = orthonormalize(f.R);
+}
+
+/// Explicit (forward) Euler: every part of the state moves with the old rates.
+class EulerStepper final : public Stepper {
+ public:
+  using Stepper::Stepper;
+  std::string name() const override { return "euler"; }
+  int order() const override { return 1; }
+  StepInfo step(State& x, const VecX& tau_cmd, double h) override {
+    const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
+    const int n = model_.n;
+    if (model_.floating) advance_base(x.base, h * x.v.head<6>());
+    x.q.noalias() += h * x.v.tail(n);
+    x.v.noalias() += h * a;
+    StepInfo info;
+    info.evaluations = 1;
+    info.substeps = 1;
+    return info;
+  }
+};
+
+/// Semi-implicit (symplectic) Euler: rates first, then the pose with the new rates.
+class SymplecticEulerStepper final : public Stepper {
+ public:
+  using Stepper::Stepper;
+  std::string name() const override { return "symplectic_euler"; }
+  int order() const override { return 1; }
+  StepInfo step(State& x, const VecX& tau_cmd, double h) override {
+    const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
+    const int n = model_.n;
+    x.v.noalias() += h * a;
+    if (model_.floating) advance_base(x.base, h * x.v.head<6>());
+    x.q.noalias() += h * x.v.tail(n);
+    StepInfo info;
+    info.evaluations = 1;
+    info.substeps = 1;
+    return info;
+  }
+};
+
+struct Entry {
+  std::string description;
+  StepperFactory factory;
+};
+
+struct Registry {
+  std::mutex mutex;
+  std::map<std::string, Entry> entries;
+  Registry() {
+    entries["euler"] = {"explicit Euler on SE(3) (order 1)",
+                        [](const Model& m, const StepperOptions& o) -> std::unique_ptr<Stepper> {
+                          return std::make_unique<EulerStepper>(m, o);
+                        }};
+    entries["symplectic_euler"] = {
+        "semi-implicit Euler: v first, then f <- f exp(h V0), q <- q + h qdot (order 1)",
+        [](const Model& m, const StepperOptions& o) -> std::unique_ptr<Stepper> {
+          return std::make_unique<SymplecticEulerStepper>(m, o);
+        }};
+    entries["rkmk4"] = {"classical Runge-Kutta 4 in Runge-Kutta-Munthe-Kaas form (order 4)",
+                        [](const Model& m, const StepperOptions& o) {
+                          return make_rkmk_stepper(tableau_rk4(), m, o);
+                        }};
+    entries["rkmk45"] = {
+        "Dormand-Prince 5(4) in Runge-Kutta-Munthe-Kaas form, adaptive with error control (tol)",
+        [](const Model& m, const StepperOptions& o) {
+          return make_rkmk_stepper(tableau_dormand_prince45(), m, o);
+        }};
+  }
+};
+
+// Built-ins are registered in the constructor, not by static objects in other translation
+// units (a static library drops those when nothing references them).
+Registry& registry() {
+  static Registry r;
+  return r;
+}
+
+}  // namespace
+
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const Model& model,
+                                      const StepperOptions& opt) {
+  StepperFactory f;
+  {
+    Registry& r = registry();
+    std::lock_guard<std::mutex> lock(r.mutex);
+    const auto it = r.entries.find(name);
+    if (it != r.entries.end()) f = it->second.factory;
+  }
+  if (!f) {
+    std::string known;
+    for (const auto& s : stepper_names()) known += (known.empty() ? "" : ", ") + s;
+    throw std::invalid_argument("unknown integrator '" + name + "' (known: " + known + ")");
+  }
+  return f(model, opt);
+}
+
+void register_stepper(const std::string& name, const std::string& description,
+                      StepperFactory factory) {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  r.entries[name] = {description, std::move(factory)};
+}
+
+std::vector<std::string> stepper_names() {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  std::vector<std::string> names;
+  for (const auto& kv : r.entries) names.push_back(kv.first);
+  return names;
+}
+
+std::string stepper_description(const std::string& name) {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  const auto it = r.entries.find(name);
+  return it == r.entries.end() ? std::string() : it->second.description;
+}
+
+}  // namespace se3

@@ -1,0 +1,215 @@
+// The Simulator (sim.h): stepping with commands, passive forces and the divergence guard.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "se3_sim/sim.h"
+
+namespace se3 {
+
+Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
+    : model_(std::make_unique<Model>(std::move(model))),
+      config_(config),
+      diag_(*model_),
+      initial_(initial),
+      command_(VecX::Zero(model_->nv)) {
+  if (!(config_.dt > 0) || !std::isfinite(config_.dt)) {
+    throw std::invalid_argument("dt must be positive and finite");
+  }
+  if (config_.guard.energy_check_every < 1) config_.guard.energy_check_every = 1;
+  stepper_ = make_stepper(config_.integrator, *model_, config_.stepper);
+  set_initial_state(initial);
+  reset();
+}
+
+void Simulator::set_initial_state(const State& s) {
+  if (s.q.size() != model_->n || s.v.size() != model_->nv) {
+    throw std::invalid_argument("state sizes do not match the model");
+  }
+  if (!s.finite()) throw std::invalid_argument("initial state is not finite");
+  initial_ = s;
+}
+
+void Simulator::set_state(const State& s) {
+  if (s.q.size() != model_->n || s.v.size() != model_->nv) {
+    throw std::invalid_argument("state sizes do not match the model");
+  }
+  state_.base = s.base;
+  state_.q = s.q;
+  state_.v = s.v;
+  last_good_ = state_;
+  last_checked_ = state_;
+  last_good_time_ = last_checked_time_ = time_;
+  last_good_steps_ = last_checked_steps_ = steps_;
+  stepper_->restart();
+}
+
+void Simulator::reset() {
+  state_ = initial_;
+  last_good_ = initial_;
+  last_checked_ = initial_;
+  time_ = last_good_time_ = last_checked_time_ = 0;
+  steps_ = substeps_ = rejected_ = evaluations_ = 0;
+  last_good_steps_ = last_checked_steps_ = 0;
+  failure_.clear();
+  command_.setZero();
+  stepper_->restart();
+  refresh_reference();
+}
+
+void Simulator::refresh_reference() {
+  T0_ = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
+  U0_ = se3::potential_energy(*model_, diag_, state_.base, state_.q);
+  const double m = model_->total_mass();
+  E_ref_ = std::max(T0_, 0.5 * m) + m * model_->gravity.norm();
+  if (!(E_ref_ > 0)) E_ref_ = 1;
+}
+
+void Simulator::set_integrator(const std::string& name) {
+  auto s = make_stepper(name, *model_, config_.stepper);
+  stepper_ = std::move(s);
+  config_.integrator = name;
+}
+
+void Simulator::set_dt(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("dt must be positive");
+  config_.dt = dt;
+  stepper_->restart();
+}
+
+double Simulator::set_joint_effort(int i, double effort) {
+  if (i < 1 || i > model_->n) throw std::out_of_range("joint index out of range");
+  const double lim = model_->effort[i];
+  if (std::isfinite(lim) && lim > 0) effort = std::min(lim, std::max(-lim, effort));
+  command_[(model_->floating ? 6 : 0) + i - 1] = effort;
+  return effort;
+}
+
+void Simulator::set_base_wrench(const Vec6& wrench) {
+  if (model_->floating) command_.head<6>() = wrench;
+}
+
+void Simulator::clear_command() {
+  command_.setZero();
+}
+
+void Simulator::applied_joint_efforts(VecX& out) {
+  const int off = model_->floating ? 6 : 0;
+  out.resize(model_->n);
+  for (int i = 0; i < model_->n; ++i) out[i] = command_[off + i];
+  const StepperOptions& o = stepper_->options();
+  if (!o.passive_forces) return;
+  for (int i = 1; i <= model_->n; ++i) {
+    const double qd = state_.v[off + i - 1];
+    out[i - 1] -= model_->damping[i] * qd + model_->friction[i] * std::tanh(qd / o.friction_eps);
+  }
+}
+
+bool Simulator::check_rates(std::string& why) const {
+  if (!state_.finite()) {
+    why = "non-finite state";
+    return false;
+  }
+  const double vmax = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
+  if (vmax > config_.guard.max_rate) {
+    why = "a rate of " + std::to_string(vmax) + " exceeds the limit " +
+          std::to_string(config_.guard.max_rate);
+    return false;
+  }
+  return true;
+}
+
+bool Simulator::step() {
+  if (!failure_.empty()) return false;
+  const StepInfo info = stepper_->step(state_, command_, config_.dt);
+  evaluations_ += info.evaluations;
+  substeps_ += info.substeps;
+  rejected_ += info.rejected;
+  std::string why;
+  bool ok = info.ok;
+  if (!ok) why = info.reason;
+  if (ok) ok = check_rates(why);
+  bool rollback_to_checked = false;
+  if (ok && (steps_ + 1) % config_.guard.energy_check_every == 0) {
+    const double T = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
+    if (!std::isfinite(T) || T > config_.guard.energy_growth * E_ref_) {
+      ok = false;
+      rollback_to_checked = true;
+      why = "kinetic energy " + std::to_string(T) + " J exceeds " +
+            std::to_string(config_.guard.energy_growth) + " x the reference " +
+            std::to_string(E_ref_) + " J";
+    }
+  }
+  if (!ok) {
+    const State& back = rollback_to_checked ? last_checked_ : last_good_;
+    state_.base = back.base;
+    state_.q = back.q;
+    state_.v = back.v;
+    time_ = rollback_to_checked ? last_checked_time_ : last_good_time_;
+    steps_ = rollback_to_checked ? last_checked_steps_ : last_good_steps_;
+    failure_ = "diverged at t = " + std::to_string(time_ + config_.dt) + " s with " +
+               stepper_->name() + ", dt = " + std::to_string(config_.dt) + ": " + why +
+               "; state rolled back to t = " + std::to_string(time_) + " s";
+    stepper_->restart();
+    return false;
+  }
+  ++steps_;
+  time_ += config_.dt;
+  last_good_.base = state_.base;
+  last_good_.q = state_.q;
+  last_good_.v = state_.v;
+  last_good_time_ = time_;
+  last_good_steps_ = steps_;
+  if (steps_ % config_.guard.energy_check_every == 0) {
+    last_checked_.base = state_.base;
+    last_checked_.q = state_.q;
+    last_checked_.v = state_.v;
+    last_checked_time_ = time_;
+    last_checked_steps_ = steps_;
+  }
+  return true;
+}
+
+int Simulator::step_n(int k) {
+  int done = 0;
+  while (done < k && step()) ++done;
+  return done;
+}
+
+double Simulator::kinetic_energy() {
+  return se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
+}
+
+double Simulator::potential_energy() {
+  return se3::potential_energy(*model_, diag_, state_.base, state_.q) - U0_;
+}
+
+Vec6 Simulator::momentum() {
+  return se3::spatial_momentum(*model_, diag_, state_.base, state_.q, state_.v);
+}
+
+Vec3 Simulator::center_of_mass() {
+  return se3::center_of_mass(*model_, diag_, state_.base, state_.q);
+}
+
+void Simulator::link_poses(std::vector<SE3>& out) {
+  forward_kinematics(*model_, diag_, state_.base, state_.q);
+  out.resize(model_->links.size());
+  for (size_t k = 0; k < model_->links.size(); ++k) {
+    const LinkFrame& L = model_->links[k];
+    out[k] = diag_.oMb[L.body] * L.offset;
+  }
+}
+
+std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml) {
+  Model m = scene_model(scene, urdf_xml);
+  const State x = scene_state(scene, m);
+  SimConfig cfg;
+  cfg.integrator = scene.integrator;
+  cfg.dt = scene.dt;
+  cfg.stepper.tol = scene.tol;
+  cfg.stepper.friction_eps = scene.friction_eps;
+  return std::make_unique<Simulator>(std::move(m), x, cfg);
+}
+
+}  // namespace se3
