@@ -91,6 +91,7 @@ class RendererImageTest(unittest.TestCase):
         self.tf_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
 
     def on_image(self, msg):
+        self.count = getattr(self, "count", 0) + 1
         self.last = (time.time(), bytes(msg._buff))
 
     def wait_image(self, after, timeout=30.0):
@@ -162,6 +163,13 @@ class RendererImageTest(unittest.TestCase):
             self.assertGreater(sum(sky), sum(ground) + 40, "column %d row %.1f" % (u, vh))
             above = self.px(after, u, math.floor(vh) - 12)
             self.assertLess(abs(sum(above) - sum(sky)), 40)
+
+        # The image rate follows ~rate (20 Hz here); loose, the test machine is shared.
+        start, t0 = self.count, time.time()
+        time.sleep(3.0)
+        hz = (self.count - start) / (time.time() - t0)
+        self.assertGreater(hz, 0.5 * 20, "renderer/image at %.1f Hz" % hz)
+        self.assertLess(hz, 1.5 * 20, "renderer/image at %.1f Hz" % hz)
 
 
 if __name__ == "__main__":
