@@ -291,11 +291,12 @@ std::string Controller::panel(const std::string& title) const {
   p += "        + or = raise, - lower by one step   Backspace zero joint   space zero all\n";
   p += "        ] or * step x" + fmt("%g", params_.step_factor) + "   [ or / step /" +
        fmt("%g", params_.step_factor) + "   q or Ctrl-C quit\n";
+  p += "mouse:  left drag: torque = limit * columns / " + fmt("%g", params_.drag_columns) +
+       "   left click: zero joint   wheel: select\n";
+  p += "        middle click: zero all\n";
   p += "camera: a/d yaw   w/s pitch   z/x zoom in/out   right-button drag orbits\n";
-  p += "mouse:  left drag sets torque (full limit per " + fmt("%g", params_.drag_columns) +
-       " columns)   wheel selects   left click zeroes joint   middle click zeroes all\n";
   p += "\n";
-  p += "    #  joint                          torque       limit\n";
+  p += "    #  joint                    torque (N m or N)       limit\n";
   for (std::size_t i = 0; i < joints_.size(); ++i) {
     const auto& j = joints_[i];
     std::string name = j.name.size() > 28 ? j.name.substr(0, 25) + "..." : j.name;
