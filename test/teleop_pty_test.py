@@ -305,6 +305,26 @@ class TeleopOnPty(unittest.TestCase):
         self.assertEqual(node.wait_exit(), -signal.SIGSEGV)
         self.check_restored(node)
 
+    def test_waits_for_robot_description(self):
+        # As with sim.launch and a scene: robot_description is empty until the simulator has
+        # loaded the robot.
+        urdf = rospy.get_param('robot_description')
+        self.addCleanup(rospy.set_param, 'robot_description', urdf)
+        rospy.set_param('robot_description', '')
+        t = time.time()
+        node = PtyNode()
+        self.addCleanup(node.close)
+        time.sleep(2.0)
+        self.assertIsNone(node.proc.poll(), 'gave up waiting: ' + node.errors())
+        self.assertEqual(self.torques.since(t), [])
+        rospy.set_param('robot_description', urdf)
+        _, msg = self.torques.wait_for(lambda m: True, timeout=15.0)
+        self.assertIsNotNone(msg, 'no torque_command; stderr: ' + node.errors())
+        self.assertEqual(list(msg.name)[:7], PANDA_ARM)
+        node.type(b'q')
+        self.assertEqual(node.wait_exit(), 0, node.errors())
+        self.check_restored(node)
+
     def test_without_a_terminal_it_exits_cleanly(self):
         res = subprocess.run([node_executable()], stdin=subprocess.DEVNULL,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=20)

@@ -11,7 +11,7 @@
 // Private parameters: ~rate (Hz, 20), ~timeout (dead-man, s, 1.0; <= 0 disables it),
 // ~step (initial torque step, 1.0), ~default_effort_limit (10.0, for joints whose URDF
 // effort is missing, zero or infinite), ~drag_columns (40: columns of mouse drag for the
-// full effort limit).
+// full effort limit), ~description_timeout (30 s to wait for a non-empty robot_description).
 #include <fcntl.h>
 #include <geometry_msgs/Twist.h>
 #include <poll.h>
@@ -120,7 +120,6 @@ bool enter_raw_mode() {
   raw.c_lflag &= ~static_cast<tcflag_t>(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
   raw.c_cc[VMIN] = 1;
   raw.c_cc[VTIME] = 0;
-  install_handlers();
   std::atexit(restore_terminal);
   g_raw = 1;  // set first: a signal arriving from here on restores
   if (tcsetattr(g_in_fd, TCSANOW, &raw) != 0) {
@@ -177,6 +176,7 @@ int run(int argc, char** argv) {
                  "to read; run it in a terminal (roslaunch se3_sim teleop.launch). Exiting.\n");
     return 0;
   }
+  install_handlers();
   ros::init(argc, argv, "teleop", ros::init_options::NoSigintHandler);
   ros::NodeHandle nh, pnh("~");
 
@@ -195,18 +195,44 @@ int run(int argc, char** argv) {
     return 1;
   }
 
+  // robot_description may come late (the simulator publishes a scene's robot once loaded).
+  const double description_timeout = pnh.param("description_timeout", 30.0);
+  const std::string description = nh.resolveName("robot_description");
   std::string xml;
-  if (!nh.getParam("robot_description", xml)) {
-    ROS_ERROR("teleop: parameter %s is not set (load a URDF there first)",
-              nh.resolveName("robot_description").c_str());
-    return 1;
+  const auto wait0 = std::chrono::steady_clock::now();
+  bool told = false;
+  while (ros::ok() && !g_stop_signal) {
+    if (nh.getParam("robot_description", xml) && !xml.empty()) break;
+    if (seconds_since(wait0) >= description_timeout) {
+      ROS_ERROR("teleop: parameter %s is not set (or empty) after %g s: load a URDF there first",
+                description.c_str(), description_timeout);
+      return 1;
+    }
+    if (!told) ROS_INFO("teleop: waiting for %s ...", description.c_str());
+    told = true;
+    ros::WallDuration(0.2).sleep();
   }
+  if (xml.empty()) return 0;  // stopped while waiting
+
+  // Only joint names and effort limits matter here: a fixed base is the simpler reading; a
+  // URDF that only loads with a free base (e.g. a floating root joint) is read that way.
   std::vector<se3::teleop::JointInfo> joints;
   try {
-    const se3::Model model = se3::model_from_urdf_string(xml);
+    se3::Model model;
+    try {
+      model = se3::model_from_urdf_string(xml);
+    } catch (const std::exception& fixed_error) {
+      se3::UrdfOptions floating;
+      floating.floating = true;
+      try {
+        model = se3::model_from_urdf_string(xml, floating);
+      } catch (const std::exception&) {
+        throw se3::ModelError(fixed_error.what());  // the fixed-base reason is the clearer one
+      }
+    }
     joints = se3::teleop::joints_from_model(model, params.default_effort_limit);
   } catch (const std::exception& e) {
-    ROS_ERROR("teleop: cannot use robot_description: %s", e.what());
+    ROS_ERROR("teleop: cannot use %s: %s", description.c_str(), e.what());
     return 1;
   }
   if (joints.empty()) {
