@@ -206,7 +206,8 @@ struct SimulateResult {
   double momentum_drift_rel = std::numeric_limits<double>::quiet_NaN();
   /// Not yet applicable (no constraints in scenes): NaN.
   double constraint_error_max = std::numeric_limits<double>::quiet_NaN();
-  /// max |c(t) - c(0)| of the centre of mass in m (free base and zero gravity; else NaN).
+  /// max |c(t) - c(0) - t p(0) / m| of the centre of mass in m, p the linear momentum (free
+  /// base and zero gravity; else NaN): the centre of mass moves uniformly.
   double com_drift_max = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t substeps = 0, rejected = 0, evaluations = 0;
   bool diverged = false;

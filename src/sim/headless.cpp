@@ -116,7 +116,8 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     T_max = std::max(T_max, T);
     if (conserve_momentum) {
       dh = std::max(dh, (sim.momentum() - h0).norm());
-      dc = std::max(dc, (sim.center_of_mass() - c0).norm());
+      const Vec3 c_free = c0 + sim.time() * h0.tail<3>() / sim.model().total_mass();
+      dc = std::max(dc, (sim.center_of_mass() - c_free).norm());
     }
     if (csv.is_open()) write_row(csv, sim);
   }

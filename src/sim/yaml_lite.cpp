@@ -39,6 +39,24 @@ std::string strip_comment(const std::string& s) {
   return s;
 }
 
+// Open brackets minus closed ones, outside quotes.
+int flow_depth(const std::string& s) {
+  char quote = 0;
+  int depth = 0;
+  for (const char c : s) {
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return depth;
+}
+
 std::vector<Line> split_lines(const std::string& text) {
   std::vector<Line> out;
   std::istringstream in(text);
@@ -48,6 +66,13 @@ std::vector<Line> split_lines(const std::string& text) {
     ++number;
     std::string s = strip_comment(raw);
     if (trim(s).empty()) continue;
+    // A flow collection ([..] or {..}) may continue over the following lines.
+    const int first = number;
+    while (flow_depth(s) > 0) {
+      if (!std::getline(in, raw)) fail(first, "unterminated '[' or '{'");
+      ++number;
+      s += " " + trim(strip_comment(raw));
+    }
     int indent = 0;
     while (indent < static_cast<int>(s.size()) && s[indent] == ' ') ++indent;
     if (s[indent] == '\t') fail(number, "tabs are not allowed for indentation");
@@ -56,7 +81,7 @@ std::vector<Line> split_lines(const std::string& text) {
     if (body[0] == '&' || body[0] == '*' || body[0] == '|' || body[0] == '>' || body[0] == '!') {
       fail(number, "unsupported YAML construct '" + body.substr(0, 1) + "'");
     }
-    out.push_back({number, indent, body});
+    out.push_back({first, indent, body});
   }
   return out;
 }

@@ -1,0 +1,299 @@
+// The simulation layer: scene files (every shipped scene loads and runs; malformed ones are
+// refused with the line), the headless run behind `se3_dyn simulate`, the URDF writer for
+// generated robots, and the Simulator's commands and reset.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "se3_sim/sim.h"
+
+using namespace se3;
+
+namespace {
+
+const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kScenes = kSource + "/config/scenes/";
+
+std::string scene_error(const std::string& text) {
+  try {
+    parse_scene(text, kScenes, "test.yaml");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Scene, EveryShippedSceneLoadsBuildsAndRuns) {
+  for (const char* name : {"satellite_arm", "fixed_arm", "chain20", "pendulum"}) {
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(kScenes + name + ".yaml");
+    EXPECT_EQ(s.name, name);
+    auto sim = make_simulator(s);
+    const Model& m = sim->model();
+    EXPECT_EQ(m.floating, s.floating);
+    EXPECT_EQ(m.gravity, s.gravity);
+    // The initial joint values of the scene are in the state.
+    for (const auto& kv : s.initial_positions) {
+      EXPECT_EQ(sim->state().q[m.joint_index(kv.first) - 1], kv.second) << kv.first;
+    }
+    EXPECT_TRUE(sim->state().base.isApprox(s.base_pose, 1e-12));
+    const State x0 = sim->state();
+    EXPECT_EQ(sim->step_n(200), 200) << sim->failure();
+    EXPECT_NEAR(sim->time(), 0.2, 1e-12);
+    EXPECT_GT((sim->state().q - x0.q).norm() + (sim->state().v - x0.v).norm(), 1e-6)
+        << "the scene does not move";
+  }
+}
+
+TEST(Scene, SatelliteArmIsTheFreeFloatingPandaWithLockedFingersAndABus) {
+  const Scene s = load_scene(kScenes + "satellite_arm.yaml");
+  EXPECT_TRUE(s.floating);
+  EXPECT_EQ(s.gravity.norm(), 0.0);
+  const Model m = scene_model(s);
+  EXPECT_EQ(m.n, 7);
+  EXPECT_EQ(m.joint_index("panda_finger_joint1"), -1);
+  // The bus adds its 50 kg to the base.
+  UrdfOptions o;
+  o.floating = true;
+  o.locked = s.locked_joints;
+  const Model bare = model_from_urdf_file(s.robot_path, o);
+  EXPECT_NEAR(m.inertia[0].m - bare.inertia[0].m, 50.0, 1e-12);
+  // Torques on the arm make the satellite counter-rotate: a shoulder torque about z spins the
+  // base the other way about z, with zero total angular momentum.
+  auto sim = make_simulator(s);
+  State still = sim->state();
+  still.v.setZero();
+  sim->set_initial_state(still);
+  sim->reset();
+  sim->set_joint_effort(m.joint_index("panda_joint1"), 5.0);
+  ASSERT_EQ(sim->step_n(300), 300) << sim->failure();
+  const Vec3 w_base_world = sim->state().base.R * sim->state().v.head<3>();
+  EXPECT_GT(sim->state().v[6], 0.1);        // joint 1 turns positively
+  EXPECT_LT(w_base_world.z(), -1e-3);       // the bus turns the other way
+  EXPECT_LT(sim->momentum().norm(), 1e-9);  // and nothing was gained overall
+}
+
+TEST(Scene, RelativeRobotPathsResolveAgainstTheSceneOrThePackage) {
+  const Scene a = parse_scene("robot: data/robots/ur5_robot.urdf\nbase: fixed\n", kScenes);
+  EXPECT_EQ(a.robot_path, kSource + "/data/robots/ur5_robot.urdf");  // the package root
+  const Scene b = parse_scene("robot: ../../data/robots/ur5_robot.urdf\n", kScenes);
+  EXPECT_EQ(b.robot_path, kScenes + "/../../data/robots/ur5_robot.urdf");
+  const Scene c = parse_scene("robot: chain:3\n", kScenes);
+  EXPECT_EQ(c.robot_path, "chain:3");
+  EXPECT_EQ(scene_model(c).n, 3);
+}
+
+TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
+  EXPECT_NE(scene_error("base: free\n").find("needs 'robot"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbsae: free\n").find("test.yaml:2: unknown key 'bsae'"),
+            std::string::npos)
+      << scene_error("robot: chain:2\nbsae: free\n");
+  EXPECT_NE(scene_error("robot: chain:2\ndt: fast\n").find("'dt' needs a finite number"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ndt: -1\n").find("positive"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ngravity: [0, 0]\n").find("3 numbers"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase: wobbly\n").find("free or fixed"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nintegrator: leapfrog9\n").find("unknown integrator"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:0\n").find("chain:N"), std::string::npos);
+  EXPECT_NE(scene_error("robot: nowhere.urdf\n").find("not found"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_pose:\n  orientation: [0, 0, 0, 2]\n")
+                .find("unit quaternion"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ngravity: [0, 0,\n").find("unterminated"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\n\tdt: 1\n").find("tabs"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ndt: 1\ndt: 2\n").find("duplicate key 'dt'"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_inertia: {mass: 1, inertia: [1, 1, 5]}\n")
+                .find("not a physical inertia"),
+            std::string::npos);
+  // A joint the model does not have.
+  const Scene s = parse_scene("robot: chain:2\ninitial_positions: {j9: 1}\n", kScenes);
+  const Model m = scene_model(s);
+  EXPECT_THROW(scene_state(s, m), SceneError);
+}
+
+TEST(Scene, YamlSubsetParsesNestingFlowAndComments) {
+  const Scene s = parse_scene(
+      "# comment\n"
+      "name: 'my scene # not a comment'\n"
+      "robot: chain:4   # trailing comment\n"
+      "base: free\n"
+      "base_pose:\n"
+      "  position: [1, 2,\n"
+      "             3]\n"
+      "  orientation: [0, 0, 0.7071067811865476, 0.7071067811865476]\n"
+      "chain:\n"
+      "  length: 0.5\n"
+      "  masses: [2, 1]\n"
+      "initial_positions: {j1: 0.25, j3: -0.5}\n"
+      "initial_velocities:\n"
+      "  j2: 1.5\n"
+      "base_twist: [0, 0, 1, 0, 0, 0]\n"
+      "gravity: [0, 0, 0]\n"
+      "dt: 2e-3\n",
+      kScenes);
+  EXPECT_EQ(s.name, "my scene # not a comment");
+  EXPECT_EQ(s.base_pose.p, Vec3(1, 2, 3));
+  EXPECT_NEAR((s.base_pose.R * Vec3::UnitX() - Vec3::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_EQ(s.chain_length, 0.5);
+  EXPECT_EQ(s.dt, 2e-3);
+  const Model m = scene_model(s);
+  EXPECT_EQ(m.inertia[1].m, 1.0);
+  EXPECT_EQ(m.inertia[2].m, 2.0);
+  const State x = scene_state(s, m);
+  EXPECT_EQ(x.q[0], 0.25);
+  EXPECT_EQ(x.q[2], -0.5);
+  EXPECT_EQ(x.v[6 + 1], 1.5);
+  EXPECT_EQ(x.v[2], 1.0);
+}
+
+TEST(Headless, SatelliteSceneConservesEnergyAndMomentum) {
+  SimulateOptions o;
+  o.scene = kScenes + "satellite_arm.yaml";
+  o.duration = 2.0;
+  const SimulateResult r = simulate_headless(o);
+  EXPECT_EQ(r.integrator, "rkmk4");
+  EXPECT_EQ(r.steps, 2000u);
+  EXPECT_NEAR(r.sim_s, 2.0, 1e-9);
+  EXPECT_GT(r.wall_s, 0.0);
+  EXPECT_FALSE(r.diverged);
+  // The Panda's joint damping (0.003 N m s) is the only loss: small, but not zero.
+  EXPECT_LT(r.energy_drift_rel, 5e-2);
+  EXPECT_GT(r.energy_drift_rel, 1e-6);
+  EXPECT_LT(r.momentum_drift_rel, 1e-9);
+  EXPECT_LT(r.com_drift_max, 1e-9);
+  EXPECT_TRUE(std::isnan(r.constraint_error_max));
+  const std::string json = simulate_result_json(r);
+  EXPECT_NE(json.find("\"integrator\": \"rkmk4\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"steps\": 2000"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"constraint_error_max\": null"), std::string::npos) << json;
+}
+
+TEST(Headless, RandomStatesAreReproducibleAndIntegratorsRankByAccuracy) {
+  SimulateOptions o;
+  o.model = "chain:5";
+  o.floating = true;
+  o.has_gravity = true;
+  o.gravity = Vec3::Zero();
+  o.duration = 1.0;
+  o.dt = 1e-3;
+  double drift[3];
+  const char* names[3] = {"euler", "symplectic_euler", "rkmk4"};
+  for (int k = 0; k < 3; ++k) {
+    o.integrator = names[k];
+    const SimulateResult a = simulate_headless(o);
+    const SimulateResult b = simulate_headless(o);
+    EXPECT_EQ(a.energy_drift_rel, b.energy_drift_rel) << "same seed, same run";
+    drift[k] = a.energy_drift_rel;
+    EXPECT_FALSE(std::isnan(a.momentum_drift_rel));
+  }
+  EXPECT_GT(drift[0], 100 * drift[2]);  // first-order methods drift O(h), RKMK4 O(h^4)
+  EXPECT_GT(drift[1], 100 * drift[2]);
+  EXPECT_LT(drift[2], 1e-8);
+  o.seed = 2;
+  o.integrator = "rkmk4";
+  EXPECT_NE(simulate_headless(o).energy_drift_rel, drift[2]) << "another seed, another state";
+  // Under gravity there is no momentum figure.
+  o.has_gravity = false;
+  EXPECT_TRUE(std::isnan(simulate_headless(o).momentum_drift_rel));
+}
+
+TEST(Headless, WritesTheTrajectoryAndRejectsBadInput) {
+  const std::string path = ::testing::TempDir() + "se3_traj.csv";
+  SimulateOptions o;
+  o.model = kSource + "/data/robots/double_pendulum_simple.urdf";
+  o.duration = 0.01;
+  o.dt = 1e-3;
+  o.integrator = "rkmk45";
+  o.out_csv = path;
+  const SimulateResult r = simulate_headless(o);
+  EXPECT_EQ(r.steps, 10u);
+  EXPECT_TRUE(std::isnan(r.momentum_drift_rel));
+  std::ifstream in(path);
+  std::string header, line;
+  std::getline(in, header);
+  EXPECT_EQ(header,
+            "t,base_x,base_y,base_z,base_qx,base_qy,base_qz,base_qw,q:joint1,q:joint2,v:joint1,"
+            "v:joint2,kinetic,potential");
+  int rows = 0;
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, 11);
+  std::remove(path.c_str());
+  o.out_csv.clear();
+  o.integrator = "nope";
+  EXPECT_THROW(simulate_headless(o), std::invalid_argument);
+  o.integrator = "rkmk4";
+  o.duration = -1;
+  EXPECT_THROW(simulate_headless(o), std::invalid_argument);
+  o.duration = 1;
+  o.model = "chain:0";
+  EXPECT_THROW(simulate_headless(o), std::invalid_argument);
+  o.model = "/no/such.urdf";
+  EXPECT_THROW(simulate_headless(o), ModelError);
+  o.scene = "/no/such.yaml";
+  EXPECT_THROW(simulate_headless(o), SceneError);
+}
+
+TEST(UrdfWriter, GeneratedChainRoundTripsThroughUrdf) {
+  const Model a = make_chain(5, true, {1.0, 2.0}, 0.4);
+  const Model b = model_from_urdf_string(model_to_urdf(a), UrdfOptions{true, {}});
+  ASSERT_EQ(b.n, a.n);
+  Data da(a), db(b);
+  const State x = random_state(a, 4);
+  VecX tau = VecX::Zero(a.nv);
+  for (int i = 0; i < a.nv; ++i) tau[i] = 0.1 * (i + 1);
+  const VecX acc_a = aba(a, da, x.base, x.q, x.v, tau);
+  const VecX acc_b = aba(b, db, x.base, x.q, x.v, tau);
+  EXPECT_LT((acc_a - acc_b).norm(), 1e-9 * (1 + acc_a.norm()));
+  EXPECT_EQ(b.links.size(), a.links.size());
+}
+
+TEST(Simulator, ResetStepAndCommands) {
+  const Scene s = load_scene(kScenes + "pendulum.yaml");
+  auto sim = make_simulator(s);
+  const State x0 = sim->state();
+  ASSERT_EQ(sim->step_n(50), 50);
+  EXPECT_EQ(sim->steps(), 50u);
+  EXPECT_GT((sim->state().q - x0.q).norm(), 1e-4);
+  sim->set_joint_effort(1, 0.3);
+  sim->reset();
+  EXPECT_EQ(sim->steps(), 0u);
+  EXPECT_EQ(sim->time(), 0.0);
+  EXPECT_EQ(sim->state().q, x0.q);
+  EXPECT_EQ(sim->command().norm(), 0.0);
+  // Applied effort = command - damping * qdot (the double pendulum's joints have damping).
+  State moving = x0;
+  moving.v << 1.0, -2.0;
+  sim->set_state(moving);
+  sim->set_joint_effort(2, 0.1);
+  VecX eff;
+  sim->applied_joint_efforts(eff);
+  const Model& m = sim->model();
+  EXPECT_NEAR(eff[0], -m.damping[1] * 1.0, 1e-15);
+  EXPECT_NEAR(eff[1], 0.1 + m.damping[2] * 2.0, 1e-15);
+  EXPECT_GT(m.damping[1], 0.0);
+  // Link poses: one per URDF link, the root at the base pose.
+  std::vector<SE3> poses;
+  sim->link_poses(poses);
+  ASSERT_EQ(poses.size(), m.links.size());
+  EXPECT_TRUE(poses[0].isApprox(s.base_pose * m.links[0].offset, 1e-12));
+  // A different integrator keeps the state.
+  sim->set_integrator("symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->state().v, moving.v);
+  EXPECT_THROW(sim->set_integrator("nope"), std::invalid_argument);
+  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

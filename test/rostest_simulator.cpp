@@ -1,0 +1,276 @@
+// rostest node for simulator_node (test/simulator.test): rates of joint_states and TF, every
+// link in TF, torque commands by name, rejection of bad commands, stale commands, and the
+// reset/pause/resume/step services. Comparisons of motion are made between runs from the same
+// reset state advanced by the step service, so they do not depend on wall-clock timing.
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <std_srvs/Empty.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+
+#include "se3_sim/ChainState.h"
+#include "se3_sim/JointTorques.h"
+#include "se3_sim/SimStats.h"
+#include "se3_sim/Step.h"
+#include "se3_sim/model.h"
+
+namespace {
+
+struct Listener {
+  std::mutex mu;
+  std::vector<double> js_times, tf_times;
+  std::set<std::string> tf_frames;
+  sensor_msgs::JointState last_js;
+  se3_sim::ChainState last_cs;
+  se3_sim::SimStats last_stats;
+  int stats_count = 0;
+  bool nan_seen = false;
+
+  void on_js(const sensor_msgs::JointState::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    js_times.push_back(ros::WallTime::now().toSec());
+    last_js = *m;
+    for (double x : m->position) nan_seen = nan_seen || !std::isfinite(x);
+    for (double x : m->velocity) nan_seen = nan_seen || !std::isfinite(x);
+    for (double x : m->effort) nan_seen = nan_seen || !std::isfinite(x);
+  }
+  void on_tf(const tf2_msgs::TFMessage::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    tf_times.push_back(ros::WallTime::now().toSec());
+    for (const auto& t : m->transforms) tf_frames.insert(t.child_frame_id);
+  }
+  void on_cs(const se3_sim::ChainState::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    last_cs = *m;
+  }
+  void on_stats(const se3_sim::SimStats::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    last_stats = *m;
+    ++stats_count;
+  }
+};
+
+Listener* g = nullptr;
+double g_rate = 100.0;
+
+void wait(double s) {
+  ros::WallDuration(s).sleep();
+}
+
+bool call_empty(const std::string& name) {
+  std_srvs::Empty e;
+  return ros::service::call(name, e);
+}
+
+se3_sim::Step::Response step(unsigned n) {
+  se3_sim::Step s;
+  s.request.steps = n;
+  EXPECT_TRUE(ros::service::call("simulator/step", s));
+  return s.response;
+}
+
+/// Joint positions by name from the latest chain_state published after now.
+std::map<std::string, double> fresh_positions() {
+  wait(3.0 / g_rate);
+  std::lock_guard<std::mutex> l(g->mu);
+  std::map<std::string, double> out;
+  for (size_t k = 0; k < g->last_cs.name.size(); ++k) {
+    out[g->last_cs.name[k]] = g->last_cs.position[k];
+  }
+  return out;
+}
+
+se3_sim::SimStats fresh_stats() {
+  wait(3.0 / g_rate);
+  std::lock_guard<std::mutex> l(g->mu);
+  return g->last_stats;
+}
+
+/// Reset, pause, optionally publish a command, step n, return the positions.
+std::map<std::string, double> run_from_reset(ros::Publisher& pub, const se3_sim::JointTorques* cmd,
+                                             unsigned n, double delay_before_step = 0.0) {
+  EXPECT_TRUE(call_empty("simulator/pause"));
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  if (cmd) {
+    pub.publish(*cmd);
+    wait(0.1);  // delivery
+  }
+  if (delay_before_step > 0) wait(delay_before_step);
+  const auto r = step(n);
+  EXPECT_TRUE(r.success) << r.message;
+  return fresh_positions();
+}
+
+double rate_of(const std::vector<double>& t) {
+  if (t.size() < 3) return 0;
+  return (t.size() - 1) / (t.back() - t.front());
+}
+
+}  // namespace
+
+TEST(Simulator, PublishesJointStatesAndEveryLinkInTfAtTheRate) {
+  {
+    std::lock_guard<std::mutex> l(g->mu);
+    g->js_times.clear();
+    g->tf_times.clear();
+  }
+  wait(2.0);
+  std::string urdf;
+  ASSERT_TRUE(ros::param::get("robot_description", urdf));
+  ASSERT_FALSE(urdf.empty());
+  const se3::Model m = se3::model_from_urdf_string(urdf, {});
+  std::lock_guard<std::mutex> l(g->mu);
+  EXPECT_NEAR(rate_of(g->js_times), g_rate, 0.1 * g_rate);
+  EXPECT_NEAR(rate_of(g->tf_times), g_rate, 0.1 * g_rate);
+  for (const auto& link : m.links) {
+    if (link.name == "world") continue;
+    EXPECT_TRUE(g->tf_frames.count(link.name)) << "no TF for link " << link.name;
+  }
+  // joint_states names every URDF joint that moves (locked ones included).
+  std::set<std::string> names(g->last_js.name.begin(), g->last_js.name.end());
+  for (int i = 1; i <= m.n; ++i) EXPECT_TRUE(names.count(m.joint_name[i])) << m.joint_name[i];
+  EXPECT_EQ(g->last_js.position.size(), g->last_js.name.size());
+  EXPECT_EQ(g->last_js.velocity.size(), g->last_js.name.size());
+  EXPECT_EQ(g->last_js.effort.size(), g->last_js.name.size());
+  EXPECT_FALSE(g->nan_seen);
+}
+
+TEST(Simulator, TorqueByNameMovesThatJoint) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
+  wait(0.5);
+  const auto base = run_from_reset(pub, nullptr, 200);
+  se3_sim::JointTorques cmd;
+  // The wrist's last joint: on the free-floating arm its torque couples least into the others
+  // (a torque on a middle joint legitimately whips the light wrist joints around).
+  cmd.name = {"panda_joint7"};
+  cmd.effort = {1.0};
+  const auto moved = run_from_reset(pub, &cmd, 200);
+  const double d7 = moved.at("panda_joint7") - base.at("panda_joint7");
+  EXPECT_GT(d7, 0.05);  // pushed positively
+  for (const auto& kv : base) {
+    if (kv.first == "panda_joint7") continue;
+    EXPECT_LT(std::abs(moved.at(kv.first) - kv.second), 0.2 * d7) << kv.first;
+  }
+  // The opposite torque turns it the other way.
+  cmd.effort = {-1.0};
+  const auto back = run_from_reset(pub, &cmd, 200);
+  EXPECT_LT(back.at("panda_joint7") - base.at("panda_joint7"), -0.05);
+  // Effort limits: 1000 N m is clamped to the URDF's 12 N m.
+  cmd.effort = {1000.0};
+  const auto clamped = run_from_reset(pub, &cmd, 200);
+  cmd.effort = {12.0};
+  const auto at_limit = run_from_reset(pub, &cmd, 200);
+  EXPECT_NEAR(clamped.at("panda_joint7"), at_limit.at("panda_joint7"), 1e-12);
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  EXPECT_TRUE(call_empty("simulator/resume"));
+}
+
+TEST(Simulator, BadCommandsAreRejectedCountedAndDoNotAct) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
+  wait(0.5);
+  const auto base = run_from_reset(pub, nullptr, 100);
+  const std::uint64_t before = fresh_stats().rejected_commands;
+  se3_sim::JointTorques unknown, nan, mismatch;
+  unknown.name = {"panda_joint4", "no_such_joint"};
+  unknown.effort = {20.0, 1.0};
+  nan.name = {"panda_joint4"};
+  nan.effort = {std::numeric_limits<double>::quiet_NaN()};
+  mismatch.name = {"panda_joint4", "panda_joint2"};
+  mismatch.effort = {20.0};
+  for (const auto* c : {&unknown, &nan, &mismatch}) {
+    const auto after = run_from_reset(pub, c, 100);
+    EXPECT_EQ(after.at("panda_joint4"), base.at("panda_joint4")) << "a rejected command acted";
+  }
+  const se3_sim::SimStats st = fresh_stats();
+  EXPECT_EQ(st.rejected_commands, before + 3);
+  // Still alive and publishing finite states.
+  const int n0 = g->stats_count;
+  EXPECT_TRUE(call_empty("simulator/resume"));
+  wait(0.3);
+  EXPECT_GT(g->stats_count, n0);
+  EXPECT_FALSE(g->nan_seen);
+}
+
+TEST(Simulator, StaleCommandsStopActing) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
+  wait(0.5);
+  double timeout = 0.5;
+  ros::param::get("simulator/command_timeout", timeout);
+  const auto base = run_from_reset(pub, nullptr, 100);
+  se3_sim::JointTorques cmd;
+  cmd.name = {"panda_joint4"};
+  cmd.effort = {20.0};
+  const auto fresh = run_from_reset(pub, &cmd, 100);
+  EXPECT_GT(fresh.at("panda_joint4") - base.at("panda_joint4"), 1e-3);
+  const auto stale = run_from_reset(pub, &cmd, 100, timeout + 0.3);
+  EXPECT_EQ(stale.at("panda_joint4"), base.at("panda_joint4"));
+  EXPECT_TRUE(call_empty("simulator/resume"));
+}
+
+TEST(Simulator, ResetPauseStepResume) {
+  double dt = 0.001;
+  ASSERT_TRUE(call_empty("simulator/reset"));
+  ASSERT_TRUE(call_empty("simulator/resume"));
+  wait(0.3);
+  ASSERT_TRUE(call_empty("simulator/pause"));
+  const se3_sim::SimStats s0 = fresh_stats();
+  dt = s0.dt;
+  EXPECT_TRUE(s0.paused);
+  EXPECT_GT(s0.sim_time, 0.1);  // it ran while resumed
+  const auto p0 = fresh_positions();
+  wait(0.3);
+  const se3_sim::SimStats s1 = fresh_stats();
+  EXPECT_EQ(s1.sim_time, s0.sim_time) << "paused, yet time moved";
+  EXPECT_EQ(fresh_positions(), p0);
+  // Step N advances by exactly N dt.
+  const auto r = step(25);
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_NEAR(r.sim_time, s0.sim_time + 25 * dt, 1e-9);
+  EXPECT_NE(fresh_positions(), p0);
+  // Reset: time 0 and the scene's initial joint values.
+  ASSERT_TRUE(call_empty("simulator/reset"));
+  const se3_sim::SimStats s2 = fresh_stats();
+  EXPECT_EQ(s2.sim_time, 0.0);
+  const auto init = fresh_positions();
+  EXPECT_NEAR(init.at("panda_joint4"), -2.356, 1e-12);
+  // Step while running is refused.
+  ASSERT_TRUE(call_empty("simulator/resume"));
+  const auto refused = step(5);
+  EXPECT_FALSE(refused.success);
+  wait(0.3);
+  EXPECT_FALSE(fresh_stats().paused);
+  EXPECT_GT(fresh_stats().sim_time, 0.1);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "simulator_test");
+  ros::NodeHandle nh;
+  Listener listener;
+  g = &listener;
+  ros::param::get("~rate", g_rate);
+  ros::Subscriber a = nh.subscribe("joint_states", 100, &Listener::on_js, &listener);
+  ros::Subscriber b = nh.subscribe("/tf", 100, &Listener::on_tf, &listener);
+  ros::Subscriber c = nh.subscribe("chain_state", 100, &Listener::on_cs, &listener);
+  ros::Subscriber d = nh.subscribe("sim_stats", 100, &Listener::on_stats, &listener);
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  if (!ros::service::waitForService("simulator/step", ros::Duration(20.0))) {
+    ADD_FAILURE() << "simulator services did not come up";
+  }
+  wait(1.0);
+  const int rc = RUN_ALL_TESTS();
+  spinner.stop();
+  ros::shutdown();
+  return rc;
+}
