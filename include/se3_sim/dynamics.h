@@ -23,29 +23,30 @@ using Mat36 = Eigen::Matrix<double, 3, 6>;
 struct Data {
   explicit Data(const Model& model);
 
-  std::vector<SE3> Xup;   ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
-  std::vector<SE3> oMb;   ///< body i in the world
-  std::vector<Vec6> V;    ///< body twists (body frame), eq. (33)
-  std::vector<Vec6> A;    ///< body accelerations (body frame, gravity folded in), eq. (35)
-  std::vector<Vec6> c;    ///< velocity-product accelerations gamma, eq. (34)
-  std::vector<Vec6> F;    ///< body wrenches / bias forces, eq. (36)
-  std::vector<Mat6> IA;   ///< articulated-body inertias, eq. (38)
-  std::vector<Vec6> U;    ///< IA S
+  std::vector<SE3> Xup;  ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
+  std::vector<SE3> oMb;  ///< body i in the world
+  std::vector<Vec6> V;   ///< body twists (body frame), eq. (33)
+  std::vector<Vec6> A;   ///< body accelerations (body frame, gravity folded in), eq. (35)
+  std::vector<Vec6> c;   ///< velocity-product accelerations gamma, eq. (34)
+  std::vector<Vec6> F;   ///< body wrenches / bias forces, eq. (36)
+  std::vector<Mat6> IA;  ///< articulated-body inertias, eq. (38)
+  std::vector<Vec6> U;   ///< IA S
   std::vector<double> Dinv, u;
   std::vector<Inertia> Ic;  ///< composite inertias (CRBA)
 
-  VecX tau;   ///< rnea output (nv)
-  VecX ddq;   ///< aba output (nv)
-  VecX nle;   ///< bias H (nv)
-  MatX M;     ///< crba output (nv x nv, both triangles)
-  MatX Minv;  ///< minv output (nv x nv, both triangles)
-  std::vector<Vec6> S;           ///< joint axes in the world frame (crba, minv)
+  VecX tau;             ///< rnea output (nv)
+  VecX ddq;             ///< aba output (nv)
+  VecX nle;             ///< bias H (nv)
+  MatX M;               ///< crba output (nv x nv, both triangles)
+  MatX Minv;            ///< minv output (nv x nv, both triangles)
+  std::vector<Vec6> S;  ///< joint axes in the world frame (crba, minv)
   /// crba: world-frame joint axes, one row per twist component, so a row of D is six axpys.
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> Jrow;
   /// minv (eqs. 58-63): world-frame bias wrenches of all columns (subtrees are disjoint column
   /// ranges, so one 6 x nv block holds them all) and the acceleration blocks of the forward pass.
-  Eigen::Matrix<double, 6, Eigen::Dynamic> Fm;
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> Pm;
+  using Mat6X = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>;
+  Mat6X Fm;
+  std::vector<Mat6X> Pm;
   std::vector<int> P_slot;
   /// First body of the run of consecutive-index ancestors ending at j (crba's row segments).
   std::vector<int> run_start;

@@ -33,10 +33,10 @@ struct Geometry {
   Vec3 size = Vec3::Zero();  ///< box: full extents; cylinder: (radius, length, 0); sphere: (r,0,0)
   std::string mesh;          ///< mesh file name (not loaded; see renderer stand-ins)
   Vec3 mesh_scale = Vec3::Ones();
-  SE3 origin;                ///< shape frame in the body frame
+  SE3 origin;  ///< shape frame in the body frame
   Eigen::Vector4d rgba = Eigen::Vector4d(0.7, 0.7, 0.7, 1.0);
   bool has_color = false;
-  std::string link;          ///< URDF link it came from
+  std::string link;  ///< URDF link it came from
 };
 
 /// A URDF link and where it sits on its (merged) body.
@@ -49,13 +49,13 @@ struct LinkFrame {
 struct Model {
   // ---- structure (sizes: n+1 for per-body arrays, index 0 = base)
   bool floating = false;
-  int n = 0;   ///< number of moving joints = moving bodies
-  int nv = 0;  ///< n, plus 6 when floating
-  std::vector<int> parent;                ///< parent[0] = -1
+  int n = 0;                ///< number of moving joints = moving bodies
+  int nv = 0;               ///< n, plus 6 when floating
+  std::vector<int> parent;  ///< parent[0] = -1
   std::vector<std::vector<int>> children;
-  std::vector<JointType> joint_type;      ///< [i] for i >= 1
-  std::vector<SE3> X_tree;                ///< joint frame of body i in its parent's body frame
-  std::vector<Inertia> inertia;           ///< body inertia in its body frame (merged links)
+  std::vector<JointType> joint_type;  ///< [i] for i >= 1
+  std::vector<SE3> X_tree;            ///< joint frame of body i in its parent's body frame
+  std::vector<Inertia> inertia;       ///< body inertia in its body frame (merged links)
   /// Coordinate index of body i's joint in the generalized velocity (i - 1, + 6 if floating).
   int idx_v(int i) const { return floating ? i + 5 : i - 1; }
   /// Last body of the subtree rooted at i (bodies i..subtree_end[i] form the subtree).
@@ -64,19 +64,19 @@ struct Model {
   // ---- names and URDF data kept for the simulator, renderer and constraints
   std::string name;
   std::string root_link;
-  std::vector<std::string> body_name;   ///< URDF link that carries the body (first merged link)
-  std::vector<std::string> joint_name;  ///< [i] for i >= 1; [0] = "" (base)
-  std::vector<double> lower, upper;     ///< position limits (-inf, inf) when none
-  std::vector<double> effort, velocity; ///< effort/velocity limits (inf when none)
+  std::vector<std::string> body_name;    ///< URDF link that carries the body (first merged link)
+  std::vector<std::string> joint_name;   ///< [i] for i >= 1; [0] = "" (base)
+  std::vector<double> lower, upper;      ///< position limits (-inf, inf) when none
+  std::vector<double> effort, velocity;  ///< effort/velocity limits (inf when none)
   std::vector<double> damping, friction;
-  std::vector<LinkFrame> links;         ///< every URDF link, root first
-  std::vector<Geometry> visuals;        ///< body frame placement in Geometry::origin
+  std::vector<LinkFrame> links;   ///< every URDF link, root first
+  std::vector<Geometry> visuals;  ///< body frame placement in Geometry::origin
   std::vector<int> visual_body;
   std::vector<Geometry> collisions;
   std::vector<int> collision_body;
-  std::vector<std::string> warnings;    ///< e.g. inertias that break the triangle inequality
+  std::vector<std::string> warnings;  ///< e.g. inertias that break the triangle inequality
 
-  Vec3 gravity = Vec3(0, 0, -9.81);     ///< world frame
+  Vec3 gravity = Vec3(0, 0, -9.81);  ///< world frame
 
   /// Index (1..n) of a joint by name, or -1.
   int joint_index(const std::string& joint) const;

@@ -36,24 +36,31 @@ const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q)
     const int p = model.parent[i];
     if (p > 0 || model.floating) data.Ic[p] += data.Ic[i];
     const Vec6 F = data.Ic[i] * data.S[i];
-    const int row = off + i - 1;
-    // Ancestors come in runs of consecutive indices (a chain is a single run).
+    const int col = off + i - 1;
+    // Column i of D above the diagonal (contiguous in column-major storage); ancestors come
+    // in runs of consecutive indices (a chain is a single run).
     int j = i;
     while (j > 0) {
       const int s = data.run_start[j];
       const int c0 = off + s - 1, len = j - s + 1;
-      auto seg = data.M.row(row).segment(c0, len);
-      seg = F[0] * data.Jrow.row(0).segment(c0, len);
-      for (int r = 1; r < 6; ++r) seg += F[r] * data.Jrow.row(r).segment(c0, len);
+      double* m = data.M.col(col).data();
+      const double *j0 = data.Jrow.row(0).data(), *j1 = data.Jrow.row(1).data(),
+                   *j2 = data.Jrow.row(2).data(), *j3 = data.Jrow.row(3).data(),
+                   *j4 = data.Jrow.row(4).data(), *j5 = data.Jrow.row(5).data();
+#pragma GCC ivdep
+      for (int c = c0; c < c0 + len; ++c) {
+        m[c] =
+            F[0] * j0[c] + F[1] * j1[c] + F[2] * j2[c] + F[3] * j3[c] + F[4] * j4[c] + F[5] * j5[c];
+      }
       j = model.parent[s];
     }
-    if (model.floating) data.M.row(row).head<6>() = act_inv_force(data.oMb[0], F).transpose();
+    if (model.floating) data.M.col(col).head<6>() = act_inv_force(data.oMb[0], F);
   }
   if (model.floating) {
     // The whole system's composite inertia in the base frame.
     data.M.topLeftCorner<6, 6>() = data.Ic[0].transformed(data.oMb[0].inverse()).matrix();
   }
-  data.M.triangularView<Eigen::StrictlyUpper>() = data.M.transpose();
+  data.M.triangularView<Eigen::StrictlyLower>() = data.M.transpose();
   return data.M;
 }
 

@@ -27,7 +27,7 @@ Data::Data(const Model& model) {
   M = MatX::Zero(model.nv, model.nv);
   Minv = MatX::Zero(model.nv, model.nv);
   Jrow = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>::Zero(6, model.nv);
-  Fm = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, model.nv);
+  Fm = Mat6X::Zero(6, model.nv);
   // D^-1's forward pass keeps one 6 x nv acceleration block per open branch: a body reuses its
   // parent's block when it is the parent's last child (all earlier siblings are done by then).
   int slots = 1;
@@ -35,7 +35,7 @@ Data::Data(const Model& model) {
     const auto& sib = model.children[model.parent[i]];
     P_slot[i] = (sib.back() == i) ? P_slot[model.parent[i]] : slots++;
   }
-  Pm.assign(slots, Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, model.nv));
+  Pm.assign(slots, Mat6X::Zero(6, model.nv));
 }
 
 }  // namespace se3

@@ -11,7 +11,9 @@ namespace se3 {
 namespace detail {
 
 /// Index of the non-zero entry of S in a 6-vector: 2 (revolute) or 5 (prismatic).
-inline int axis_index(JointType t) { return t == JointType::Revolute ? 2 : 5; }
+inline int axis_index(JointType t) {
+  return t == JointType::Revolute ? 2 : 5;
+}
 
 /// X_tree * exp(S q): the parent-from-body displacement f_{i,j} = KK_j exp(S_j q_j).
 inline void joint_transform(const SE3& Xt, JointType t, double q, SE3& out) {

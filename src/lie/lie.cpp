@@ -166,7 +166,9 @@ Mat6 ad(const Vec6& V) {
 }
 
 // Eq. (22).
-Mat6 ad_star(const Vec6& V) { return ad(V).transpose(); }
+Mat6 ad_star(const Vec6& V) {
+  return ad(V).transpose();
+}
 
 // Left Jacobian of SE(3) in closed form (angular-first ordering):
 // dexp([a; l]) = [J(a), 0; Q(a, l), J(a)], Q the coupling block of the series sum ad^k/(k+1)!.

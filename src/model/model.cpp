@@ -1,9 +1,9 @@
+#include "se3_sim/model.h"
+
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <limits>
 #include <sstream>
-
-#include "se3_sim/model.h"
 
 namespace se3 {
 
@@ -41,9 +41,9 @@ void Model::finalize() {
 void Model::validate() const {
   const size_t nb = static_cast<size_t>(n) + 1;
   if (parent.size() != nb || X_tree.size() != nb || joint_type.size() != nb ||
-      inertia.size() != nb || joint_name.size() != nb || lower.size() != nb ||
-      upper.size() != nb || effort.size() != nb || damping.size() != nb ||
-      friction.size() != nb || velocity.size() != nb || body_name.size() != nb) {
+      inertia.size() != nb || joint_name.size() != nb || lower.size() != nb || upper.size() != nb ||
+      effort.size() != nb || damping.size() != nb || friction.size() != nb ||
+      velocity.size() != nb || body_name.size() != nb) {
     throw ModelError("model '" + name + "': per-body arrays do not have n + 1 entries");
   }
   for (int i = 1; i <= n; ++i) {

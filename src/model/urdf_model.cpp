@@ -1,6 +1,7 @@
 // URDF -> Model: fixed joints merged into their parent body, moving joints turned so that
 // their axis is the body's z axis (the paper's eq. (26) S_j = e_z).
 #include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -10,7 +11,6 @@
 #include <limits>
 #include <mutex>
 #include <sstream>
-#include <urdf_parser/urdf_parser.h>
 
 #include "se3_sim/model.h"
 
@@ -23,7 +23,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 class CaptureHandler : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty()) first_error = text;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty())
+      first_error = text;
   }
   std::string first_error;
 };
@@ -215,8 +216,8 @@ struct Builder {
           }
           const Mat3 Ra = frame_with_z(axis);
           const int i = m.n + 1;
-          add_body(body, T * SE3(Ra, Vec3::Zero()), prismatic ? JointType::Prismatic
-                                                              : JointType::Revolute, *j);
+          add_body(body, T * SE3(Ra, Vec3::Zero()),
+                   prismatic ? JointType::Prismatic : JointType::Revolute, *j);
           visit(*child, i, SE3(Ra.transpose(), Vec3::Zero()));
           break;
         }
@@ -254,7 +255,8 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
     err = h.first_error;
   }
   if (!u) {
-    throw ModelError("URDF rejected by urdfdom: " + (err.empty() ? std::string("parse error") : err));
+    throw ModelError("URDF rejected by urdfdom: " +
+                     (err.empty() ? std::string("parse error") : err));
   }
   const urdf::LinkConstSharedPtr root = u->getRoot();
   if (!root) throw ModelError("URDF has no root link");

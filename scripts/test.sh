@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The whole test suite: installs what is missing (with the DART and KDL oracles), builds, runs
+# every GoogleTest and rostest, and ends with one line 'N passed, N failed'. Exit 1 on failure.
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+bash "$repo/scripts/deps.sh" --test
+bash "$repo/scripts/build.sh"
+source "$repo/scripts/env.sh"
+ws="$repo/.build/ws"
+rm -rf "$ws/build/test_results"
+cd "$ws"
+echo "se3_sim: building and running the tests (log: .build/test.log)"
+# catkin_make run_tests exits 0 even when tests fail: the summary below decides.
+catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  -j"$(nproc)" tests > "$repo/.build/test.log" 2>&1 || { tail -n 40 "$repo/.build/test.log"; echo "se3_sim: test build failed"; echo "0 passed, 1 failed"; exit 1; }
+catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  -j1 run_tests >> "$repo/.build/test.log" 2>&1 || true
+python3 "$repo/scripts/test_summary.py" "$ws/build/test_results"

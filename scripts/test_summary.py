@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""Totals over the gtest and rostest result files of a catkin test run.
+
+catkin writes, per gtest binary, gtest-<name>.xml, and per rostest, rostest-<name>.xml (which
+already holds the cases of its test nodes; the test nodes' own rosunit-*.xml would count them a
+second time and are skipped). A binary that crashed or never wrote results leaves
+MISSING-*.xml, counted as one failure. Prints the failed cases, then one line
+'N passed, N failed' (', N skipped' when some were skipped); exits 1 on any failure or when no
+test ran.
+"""
+import glob
+import os
+import sys
+import xml.etree.ElementTree as ET
+
+
+def cases(path):
+    root = ET.parse(path).getroot()
+    for tc in root.iter('testcase'):
+        name = '%s.%s' % (tc.get('classname', ''), tc.get('name', ''))
+        if tc.find('failure') is not None or tc.find('error') is not None:
+            node = tc.find('failure') if tc.find('failure') is not None else tc.find('error')
+            msg = (node.get('message') or node.text or '').strip().splitlines()
+            yield name, 'failed', msg[0] if msg else ''
+        elif tc.find('skipped') is not None or tc.get('result') == 'skipped' \
+                or tc.get('status') == 'notrun':
+            yield name, 'skipped', ''
+        else:
+            yield name, 'passed', ''
+
+
+def main():
+    results = sys.argv[1] if len(sys.argv) > 1 else '.build/ws/build/test_results'
+    passed = failed = skipped = 0
+    files = sorted(glob.glob(os.path.join(results, '**', '*.xml'), recursive=True))
+    for f in files:
+        base = os.path.basename(f)
+        if base.startswith('MISSING'):
+            failed += 1
+            print('FAILED  %s (no results: the test crashed or did not run)' % base)
+            continue
+        if not (base.startswith('gtest-') or base.startswith('rostest-')):
+            continue
+        try:
+            for name, status, msg in cases(f):
+                if status == 'passed':
+                    passed += 1
+                elif status == 'skipped':
+                    skipped += 1
+                else:
+                    failed += 1
+                    print('FAILED  %s: %s  [%s]' % (name, msg[:200], base))
+        except ET.ParseError as e:
+            failed += 1
+            print('FAILED  %s: unreadable result file (%s)' % (base, e))
+    line = '%d passed, %d failed' % (passed, failed)
+    if skipped:
+        line += ', %d skipped' % skipped
+    print(line)
+    return 1 if failed or passed == 0 else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,45 @@
+// Shared pieces of the se3_dyn command-line tool (DESIGN.md, "se3_dyn").
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "se3_sim/model.h"
+
+namespace se3_dyn {
+
+/// Bad input: one line on stderr, exit code 1.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+/// Bad command line: one line on stderr, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Command-line arguments after the subcommand: positionals and --options.
+struct Args {
+  std::vector<std::string> positional;
+  std::vector<std::pair<std::string, std::string>> options;  ///< flags have value ""
+
+  /// Parses argv[first..]; `flags` take no value, every other --name takes one.
+  Args(int argc, char** argv, int first, const std::vector<std::string>& flags,
+       const std::vector<std::string>& valued);
+  bool has(const std::string& name) const;
+  std::string get(const std::string& name, const std::string& def = "") const;
+  double get_double(const std::string& name, double def) const;
+};
+
+/// Loads a model for se3_dyn: URDF file (or chain:N), free base on request, --gravity, and the
+/// column-name rules (no ':' or ',' in joint names, none starting with "base_").
+se3::Model load_model(const Args& args);
+se3::Vec3 parse_vec3(const std::string& s, const std::string& what);
+
+int cmd_info(int argc, char** argv);
+int cmd_eval(int argc, char** argv);
+int cmd_bench(int argc, char** argv);
+int cmd_simulate(int argc, char** argv);
+int cmd_render(int argc, char** argv);
+
+}  // namespace se3_dyn
