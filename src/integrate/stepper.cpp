@@ -34,7 +34,7 @@ void add_passive(const Model& model, const StepperOptions& opt, const VecX& v, V
     const double d = model.damping[i], f = model.friction[i];
     if (d == 0 && f == 0) continue;
     const double qd = v[off + i - 1];
-    out[off + i - 1] -= d * qd + f * std::tanh(qd * inv_eps);
+    out[off + i - 1] -= f == 0 ? d * qd : d * qd + f * std::tanh(qd * inv_eps);
   }
 }
 
@@ -49,6 +49,7 @@ const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
                                   const VecX& tau_cmd) {
   tau_ = tau_cmd;
   add_passive(model_, opt_, v, tau_);
+  if (hook_) return hook_->acceleration(base, q, v, tau_);
   return aba(model_, data_, base, q, v, tau_);
 }
 
