@@ -158,13 +158,12 @@ class SimulatorNode {
       throw std::runtime_error(
           "no robot: set robot_description, ~urdf_file or ~scene (a scene YAML)");
     }
-    bool floating = scene_.floating;
-    if (pnh_.getParam("floating", floating)) scene_.floating = floating;
-    pnh_.param<std::string>("integrator", scene_.integrator, scene_.integrator);
-    pnh_.param("dt", scene_.dt, scene_.dt);
-    pnh_.param("tol", scene_.tol, scene_.tol);
-    pnh_.param("real_time_factor", scene_.real_time_factor, scene_.real_time_factor);
-    pnh_.param("publish_rate", scene_.publish_rate, scene_.publish_rate);
+    override_bool("floating", scene_.floating);
+    override_string("integrator", scene_.integrator);
+    override_double("dt", scene_.dt);
+    override_double("tol", scene_.tol);
+    override_double("real_time_factor", scene_.real_time_factor);
+    override_double("publish_rate", scene_.publish_rate);
     pnh_.param("command_timeout", command_timeout_, 0.5);
     pnh_.param<std::string>("world_frame", world_frame_, "world");
     nh_.param("/use_sim_time", use_sim_time_, false);
@@ -197,6 +196,55 @@ class SimulatorNode {
         "at %g Hz",
         scene_.name.empty() ? m.name.c_str() : scene_.name.c_str(), m.n,
         m.floating ? "free" : "fixed", sim_->integrator().c_str(), sim_->dt(), rtf_, rate_);
+  }
+
+  // Scene overrides: a private parameter that is set and not the empty string (sim.launch
+  // always sets them, empty meaning "the scene's", so stale values on a running master from an
+  // earlier launch do not leak into this one).
+  bool override_value(const std::string& name, std::string& text) {
+    XmlRpc::XmlRpcValue v;
+    if (!pnh_.getParam(name, v)) return false;
+    switch (v.getType()) {
+      case XmlRpc::XmlRpcValue::TypeString:
+        text = static_cast<std::string>(v);
+        return !text.empty();
+      case XmlRpc::XmlRpcValue::TypeDouble:
+        text = std::to_string(static_cast<double>(v));
+        return true;
+      case XmlRpc::XmlRpcValue::TypeInt:
+        text = std::to_string(static_cast<int>(v));
+        return true;
+      case XmlRpc::XmlRpcValue::TypeBoolean:
+        text = static_cast<bool>(v) ? "true" : "false";
+        return true;
+      default:
+        throw std::runtime_error("~" + name + " has an unusable type");
+    }
+  }
+  void override_string(const std::string& name, std::string& out) {
+    std::string t;
+    if (override_value(name, t)) out = t;
+  }
+  void override_double(const std::string& name, double& out) {
+    std::string t;
+    if (!override_value(name, t)) return;
+    char* end = nullptr;
+    const double x = std::strtod(t.c_str(), &end);
+    if (*end != '\0' || !std::isfinite(x)) {
+      throw std::runtime_error("~" + name + " needs a number, got '" + t + "'");
+    }
+    out = x;
+  }
+  void override_bool(const std::string& name, bool& out) {
+    std::string t;
+    if (!override_value(name, t)) return;
+    if (t == "true" || t == "True" || t == "1") {
+      out = true;
+    } else if (t == "false" || t == "False" || t == "0") {
+      out = false;
+    } else {
+      throw std::runtime_error("~" + name + " needs true or false, got '" + t + "'");
+    }
   }
 
   // Under mu_. One physics step with timing; the guard pauses the simulator.
