@@ -62,6 +62,16 @@ struct StepInfo {
   std::string reason;   ///< why the step failed (ok == false); the state is then unchanged
 };
 
+/// Replaces the plain ABA acceleration inside Stepper::acceleration() (constraints.h: the
+/// multipliers of eq. (32) at every stage). tau is the total generalized force (command plus
+/// passive forces).
+class AccelerationHook {
+ public:
+  virtual ~AccelerationHook() = default;
+  virtual const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v,
+                                   const VecX& tau) = 0;
+};
+
 class Stepper {
  public:
   Stepper(const Model& model, const StepperOptions& opt);
@@ -89,12 +99,17 @@ class Stepper {
   const Model& model() const { return model_; }
   const StepperOptions& options() const { return opt_; }
   Data& data() { return data_; }
+  /// Constraint hook (not owned; nullptr = unconstrained ABA, the default). Set around a step
+  /// by ConstraintSystem::step (constraints.h).
+  void set_acceleration_hook(AccelerationHook* hook) { hook_ = hook; }
+  AccelerationHook* acceleration_hook() const { return hook_; }
 
  protected:
   const Model& model_;
   StepperOptions opt_;
   Data data_;
   VecX tau_;  ///< total generalized force of the current evaluation
+  AccelerationHook* hook_ = nullptr;
 };
 
 /// Creates a stepper by name for model. Throws std::invalid_argument naming the known ones.
