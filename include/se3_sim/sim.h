@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "se3_sim/constraints.h"
 #include "se3_sim/integrate.h"
 
 namespace se3 {
@@ -30,6 +31,8 @@ struct SceneError : std::runtime_error {
 ///   gravity: [gx,gy,gz]             integrator: rkmk4     dt: 0.001    tol: 1e-6
 ///   real_time_factor: 1.0           publish_rate: 100     friction_eps: 0.01
 ///   chain: {length: 0.3, masses: [1.0]}      (for robot: chain:N)
+///   constraints, joint_limits, ground, contacts, constraint_options: see constraints.h and
+///       src/sim/contact_scene.cpp (read into Scene::constraints)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -56,6 +59,7 @@ struct Scene {
   double friction_eps = 1e-2;
   double chain_length = 0.3;
   std::vector<double> chain_masses = {1.0};
+  ConstraintSpec constraints;  ///< bilateral constraints, limits, ground contact (empty: none)
 };
 
 /// Reads a scene file. Throws SceneError.
@@ -115,6 +119,15 @@ class Simulator {
   double set_joint_effort(int i, double effort);
   /// Wrench on a free base (base frame, about its origin); ignored for a fixed base.
   void set_base_wrench(const Vec6& wrench);
+
+  // ---- constraints (constraints.h); none unless set
+  /// Adds constraints (an empty spec removes them): anchors point_world constraints at the
+  /// initial state, projects the initial state onto the constraints and resets.
+  void set_constraints(const ConstraintSpec& spec);
+  /// nullptr when unconstrained; forces() and report() of the last step.
+  const ConstraintSystem* constraints() const { return constraints_.get(); }
+  /// Largest constraint error at the current state (ConstraintSystem::error), NaN if none.
+  double constraint_error();
   void clear_command();
   /// The commanded generalized force (size nv).
   const VecX& command() const { return command_; }
@@ -162,6 +175,7 @@ class Simulator {
   std::unique_ptr<Model> model_;
   SimConfig config_;
   std::unique_ptr<Stepper> stepper_;
+  std::unique_ptr<ConstraintSystem> constraints_;
   Data diag_;
   State initial_, state_, last_good_, last_checked_;
   VecX command_;
@@ -204,7 +218,7 @@ struct SimulateResult {
   double energy_drift_rel = std::numeric_limits<double>::quiet_NaN();
   /// max |h(t) - h(0)| / |h(0)| (world-frame spatial momentum); free base and zero gravity only.
   double momentum_drift_rel = std::numeric_limits<double>::quiet_NaN();
-  /// Not yet applicable (no constraints in scenes): NaN.
+  /// max over the run of Simulator::constraint_error() (scenes with constraints; else NaN).
   double constraint_error_max = std::numeric_limits<double>::quiet_NaN();
   /// max |c(t) - c(0) - t p(0) / m| of the centre of mass in m, p the linear momentum (free
   /// base and zero gravity; else NaN): the centre of mass moves uniformly.

@@ -2,12 +2,14 @@
 #include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
 
+#include "contact_scene.h"
 #include "se3_sim/sim.h"
 #include "yaml_lite.h"
 
@@ -117,10 +119,25 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     throw SceneError(file_for_messages + ": " + e.what());
   }
   const Reader r(file_for_messages);
-  r.only_keys(root, "the scene",
-              {"name", "robot", "base", "base_pose", "base_twist", "base_inertia",
-               "initial_positions", "initial_velocities", "locked_joints", "gravity", "integrator",
-               "dt", "tol", "real_time_factor", "publish_rate", "friction_eps", "chain"});
+  std::vector<std::string> keys = {"name",
+                                   "robot",
+                                   "base",
+                                   "base_pose",
+                                   "base_twist",
+                                   "base_inertia",
+                                   "initial_positions",
+                                   "initial_velocities",
+                                   "locked_joints",
+                                   "gravity",
+                                   "integrator",
+                                   "dt",
+                                   "tol",
+                                   "real_time_factor",
+                                   "publish_rate",
+                                   "friction_eps",
+                                   "chain"};
+  for (const auto& k : constraint_scene_keys()) keys.push_back(k);  // constraints.h
+  r.only_keys(root, "the scene", keys);
   Scene s;
   s.file = file_for_messages;
   bool has_robot = false;
@@ -218,6 +235,9 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     } else if (k == "friction_eps") {
       s.friction_eps = r.number(v, k);
       if (!(s.friction_eps > 0)) r.fail(v, "'friction_eps' must be positive");
+    } else if (std::find(constraint_scene_keys().begin(), constraint_scene_keys().end(), k) !=
+               constraint_scene_keys().end()) {
+      parse_constraint_key(k, v, file_for_messages, s.constraints);
     } else if (k == "chain") {
       if (!v.is_map()) r.fail(v, "'chain' needs {length: L, masses: [..]}");
       r.only_keys(v, "chain", {"length", "masses"});

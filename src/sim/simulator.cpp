@@ -1,6 +1,7 @@
 // The Simulator (sim.h): stepping with commands, passive forces and the divergence guard.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "se3_sim/sim.h"
@@ -89,6 +90,22 @@ void Simulator::set_base_wrench(const Vec6& wrench) {
   if (model_->floating) command_.head<6>() = wrench;
 }
 
+void Simulator::set_constraints(const ConstraintSpec& spec) {
+  constraints_.reset();
+  if (!spec.empty()) {
+    constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
+    constraints_->anchor(initial_);
+    State x = initial_;
+    constraints_->project(x);
+    initial_ = x;
+  }
+  reset();
+}
+
+double Simulator::constraint_error() {
+  return constraints_ ? constraints_->error(state_) : std::numeric_limits<double>::quiet_NaN();
+}
+
 void Simulator::clear_command() {
   command_.setZero();
 }
@@ -121,7 +138,8 @@ bool Simulator::check_rates(std::string& why) const {
 
 bool Simulator::step() {
   if (!failure_.empty()) return false;
-  const StepInfo info = stepper_->step(state_, command_, config_.dt);
+  const StepInfo info = constraints_ ? constraints_->step(*stepper_, state_, command_, config_.dt)
+                                     : stepper_->step(state_, command_, config_.dt);
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;
@@ -209,7 +227,9 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.dt = scene.dt;
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
-  return std::make_unique<Simulator>(std::move(m), x, cfg);
+  auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
+  if (!scene.constraints.empty()) sim->set_constraints(scene.constraints);
+  return sim;
 }
 
 }  // namespace se3

@@ -1,0 +1,252 @@
+// Constrained dynamics (Reuss 2002, eqs. 27-32), joint limits and ground contact.
+//
+// Bilateral constraints Psi(q) w = 0 (eq. 27) with w the generalized velocity of dynamics.h:
+//   - point_world: a point of a link held at a world point,
+//   - point_point: a point of one link held on a point of another (closes a loop),
+//   - axis_parallel: an axis of a link kept parallel to a world axis.
+// A point constraint has one row per constrained world direction (x, y, z by default; a planar
+// loop names the two in-plane directions), an axis constraint two rows (the axis' components
+// along two world directions normal to the target axis).
+//
+// Sign convention. The library writes the equations of motion as D wdot + H = tau (H = bias(),
+// the paper's eq. (30) has +H on the right: H_paper = -H). With constraint forces:
+//   D wdot + H = tau + Psi^T lambda,                                   (30)
+//   Psi wdot + Psi_dot w = -2 alpha Psi w - beta^2 phi(q)              (28) + Baumgarte
+// Eliminating wdot = a_free + D^-1 Psi^T lambda with a_free = D^-1 (tau - H) (one ABA call):
+//   (Psi D^-1 Psi^T) lambda = -Psi a_free - Psi_dot w - 2 alpha Psi w - beta^2 phi   (32)
+// which is the paper's (32), -Psi D^-1 (tau + H_paper) - Psi_dot w, plus the Baumgarte terms.
+// lambda is the constraint force along the rows: for a point row along the world direction d,
+// the force lambda d acts on link a at its point (and -lambda d on link b); for an axis row,
+// a torque. D^-1 comes from minv() (eqs. 55-63, never forming D). Psi D^-1 Psi^T is factorized
+// by LDLT; when a pivot falls below singular_tol times the largest (redundant or singular
+// constraints), the minimum-norm least-squares multiplier is taken from an eigen-decomposition
+// instead (the pseudo-inverse), and the step is counted in ConstraintReport::singular_solves.
+//
+// Drift: Baumgarte stabilization with alpha = 2 zeta omega, beta = omega (zeta = 1: critically
+// damped error dynamics phi'' + 2 omega phi' + omega^2 phi = 0), and after each step a projection
+// onto the constraint manifold in the metric of D (positions by Gauss-Newton steps
+// dq = -D^-1 Psi^T (Psi D^-1 Psi^T)^+ phi, the base moved by f exp(dq_0), then velocities
+// w -= D^-1 Psi^T (Psi D^-1 Psi^T)^+ Psi w, the smallest change of kinetic energy).
+//
+// Unilateral constraints (joint limits lambda >= 0, ground contact lambda_n >= 0 with Coulomb
+// friction |lambda_t| <= mu lambda_n) are solved at the velocity level by time stepping
+// (Moreau/Stewart-Trinkle): over a step h the free velocity w* = w + h a_free receives impulses
+// p, w+ = w* + D^-1 J^T p, chosen by projected Gauss-Seidel on the Delassus matrix
+// W = J D^-1 J^T so that every row meets its law (bilateral: J w+ = b; limit and normal:
+// J w+ >= b, p >= 0, complementary; friction: the tangential impulse of a contact in the disc of
+// radius mu p_n, opposing slip); then the pose moves with w+ (symplectic Euler on SE(3)).
+// Restitution is 0. b holds the position correction: a gap g > 0 may close within the step
+// (b = -g / h, no tunnelling), a penetration deeper than `slop` is pushed out at the rate
+// erp (g + slop) / h. Forces are p / h. A scene with limits or contact steps this way whatever
+// its integrator; a scene with only bilateral constraints uses its integrator with the
+// multipliers of (32) inside every stage.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "se3_sim/integrate.h"
+
+namespace se3 {
+
+enum class ConstraintType { PointWorld, PointPoint, AxisParallel };
+
+/// One bilateral constraint, by URDF link name (the model's links; "world" or "" is the world).
+struct BilateralConstraint {
+  ConstraintType type = ConstraintType::PointWorld;
+  std::string name;                 ///< for reports and markers ("" = generated)
+  std::string link_a;               ///< the constrained link
+  Vec3 point_a = Vec3::Zero();      ///< point on link_a, link_a frame
+  std::string link_b;               ///< point_point: the other link
+  Vec3 point_b = Vec3::Zero();      ///< point_point: on link_b (its frame); point_world: world
+  Vec3 axis_a = Vec3::UnitZ();      ///< axis_parallel: axis of link_a, link_a frame
+  Vec3 axis_world = Vec3::UnitZ();  ///< axis_parallel: the world axis it stays parallel to
+  /// Point constraints: the world directions held (rows). Empty = x, y and z.
+  std::vector<Vec3> directions;
+  /// point_world: take point_b from the initial state (the link point's world position there).
+  bool world_point_from_initial = false;
+};
+
+/// A sphere (radius >= 0; 0 = a point) on a link that may touch the ground plane.
+struct ContactPoint {
+  std::string link;
+  Vec3 position = Vec3::Zero();  ///< centre in the link frame
+  double radius = 0;
+};
+
+struct ConstraintOptions {
+  // ---- bilateral, acceleration level (DAE, eq. 32)
+  double baumgarte_omega = 20.0;  ///< 1/s; 0 disables Baumgarte
+  double baumgarte_zeta = 1.0;
+  bool project = true;            ///< position and velocity projection after every step
+  double projection_tol = 1e-12;  ///< m or rad: Gauss-Newton stops below this
+  int projection_iterations = 4;
+  double singular_tol = 1e-10;  ///< relative pivot below which Psi D^-1 Psi^T counts as singular
+  // ---- velocity level (limits, contact)
+  int pgs_iterations = 200;
+  double pgs_tol = 1e-10;  ///< stop when no impulse changes by more (N s)
+  double erp = 0.2;        ///< fraction of a penetration (beyond slop) removed per step
+  double slop = 1e-4;      ///< m or rad of penetration left alone (resting contact)
+  double margin = 0.01;    ///< m or rad: rows of gaps below this (plus |rate| h) enter the solve
+  double bilateral_erp = 0.2;  ///< velocity-level bilateral rows: b = -bilateral_erp phi / h
+};
+
+/// What a scene asks for. Link names are resolved against the model by ConstraintSystem.
+struct ConstraintSpec {
+  std::vector<BilateralConstraint> bilateral;
+  bool joint_limits = false;  ///< the URDF position limits as unilateral constraints
+  bool ground = false;        ///< the plane normal . x = offset, solid below
+  Vec3 ground_normal = Vec3::UnitZ();
+  double ground_offset = 0;
+  double mu = 0.8;  ///< Coulomb friction coefficient
+  /// Contact spheres; with contacts_from_collisions also every collision sphere (centre,
+  /// radius), box (8 corners), cylinder (8 points on each rim) of the model; meshes are skipped.
+  std::vector<ContactPoint> contacts;
+  bool contacts_from_collisions = false;
+  ConstraintOptions options;
+
+  bool empty() const { return bilateral.empty() && !joint_limits && !ground; }
+};
+
+/// One constraint force for display and messages (world frame).
+struct ConstraintForce {
+  enum Kind { Bilateral = 0, Limit = 1, Contact = 2 };
+  Kind kind = Bilateral;
+  std::string name;            ///< constraint name, "limit:<joint>" or "contact:<link>:<k>"
+  int body = 0;                ///< body the force acts on (limits: the joint's body)
+  Vec3 point = Vec3::Zero();   ///< application point (world)
+  Vec3 force = Vec3::Zero();   ///< N, on `body` (a point_point pair's other body gets -force)
+  Vec3 torque = Vec3::Zero();  ///< N m, world (axis_parallel)
+  double joint_force = 0;      ///< limits: N m or N along the joint axis
+  double gap = 0;              ///< limits and contact: distance to the limit or plane (< 0: in)
+  bool active = false;         ///< carries a non-zero force this step
+};
+
+/// Diagnostics of the last step.
+struct ConstraintReport {
+  int bilateral_rows = 0;
+  int rows = 0;  ///< rows of the last solve (bilateral + active unilateral)
+  int active_contacts = 0;
+  int active_limits = 0;
+  int rank = 0;                       ///< numerical rank of the last bilateral solve
+  std::uint64_t singular_solves = 0;  ///< solves that needed the pseudo-inverse (cumulative)
+  std::uint64_t solves = 0;           ///< all multiplier solves (cumulative)
+  int pgs_iterations = 0;             ///< last PGS run
+  double pgs_change = 0;              ///< last PGS sweep's largest impulse change
+  double bilateral_error = 0;         ///< max |phi| of the bilateral rows after the step
+  double penetration = 0;             ///< deepest contact penetration (m, >= 0)
+  double limit_violation = 0;         ///< largest excursion beyond a joint limit (>= 0)
+};
+
+/// The constraints of one model with their workspace (sized once; a step allocates nothing
+/// once the first step has run). Throws ModelError for unknown links or bad numbers.
+class ConstraintSystem final : public AccelerationHook {
+ public:
+  ConstraintSystem(const Model& model, const ConstraintSpec& spec);
+
+  const Model& model() const { return model_; }
+  const ConstraintSpec& spec() const { return spec_; }
+  int bilateral_rows() const { return nb_; }
+  bool has_unilateral() const { return spec_.joint_limits || spec_.ground; }
+
+  /// Fixes the world points of point_world constraints with world_point_from_initial.
+  void anchor(const State& x);
+
+  /// Psi (nb x nv) and phi (nb) of the bilateral rows at (base, q).
+  void bilateral(const SE3& base, const VecX& q, MatX& Psi, VecX& phi);
+  /// Psi_dot w (nb) at (base, q, v).
+  void bilateral_bias(const SE3& base, const VecX& q, const VecX& v, VecX& gamma);
+
+  /// The constrained acceleration of eq. (32) with Baumgarte terms, for total generalized
+  /// force tau (the stepper's hook: every stage of every integrator). Fills lambda().
+  const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v, const VecX& tau) override;
+  /// Multipliers of the last acceleration() or step() (bilateral rows first; N, N m).
+  const VecX& lambda() const { return lambda_; }
+
+  /// Projects x onto Psi = 0 and Psi w = 0 (D metric). Returns the final max |phi|.
+  double project(State& x);
+
+  /// One step of h: bilateral only -> the stepper with the hook, then projection; with limits
+  /// or contact -> velocity-level time stepping (see the header comment).
+  StepInfo step(Stepper& stepper, State& x, const VecX& tau_cmd, double h);
+
+  /// Largest constraint error at x: bilateral |phi| (m or rad), penetration (m) and limit
+  /// excursion (rad or m), whichever is largest.
+  double error(const State& x);
+
+  /// Forces of the last step, one per constraint / limit / contact point (world frame).
+  const std::vector<ConstraintForce>& forces() const { return forces_; }
+  const ConstraintReport& report() const { return report_; }
+
+ private:
+  struct PointRef {
+    int body = 0;           ///< -1 = world
+    Vec3 r = Vec3::Zero();  ///< body frame (world frame for the world)
+  };
+  struct Bil {
+    ConstraintType type = ConstraintType::PointWorld;
+    std::string name;
+    PointRef a, b;
+    Vec3 axis_a = Vec3::UnitZ(), axis_w = Vec3::UnitZ();
+    std::vector<Vec3> dirs;  ///< row directions (point), or the two normals of axis_w (axis)
+    int row0 = 0;
+  };
+  enum RowKind { kBil, kLimLower, kLimUpper, kNormal, kTangent1, kTangent2 };
+
+  /// Forward kinematics, world axes Sw_ and (with v) the body twists and bias accelerations.
+  void kinematics(const SE3& base, const VecX& q, const VecX* v);
+  /// phi_, Psi_ and (with_bias, after kinematics with v) gamma_ = Psi_dot w.
+  void fill_bilateral(bool with_bias);
+  Vec3 point_world(const PointRef& p) const;
+  /// M(row, :) += s d^T J_p: the velocity of the body point p along the world direction d.
+  void add_point_row(const PointRef& p, const Vec3& d, double s, MatX& M, int row) const;
+  /// M(row, :) += s c^T J_w: the body's world angular velocity along c.
+  void add_angular_row(int body, const Vec3& c, double s, MatX& M, int row) const;
+  /// Psi_dot w of a body point (world frame), from Vb_ and Ab_.
+  Vec3 point_accel_bias(const PointRef& p) const;
+  /// Solves Wb_ out = rhs by LDLT, or by the pseudo-inverse when Wb_ is rank deficient.
+  void solve_multipliers(const VecX& rhs, VecX& out);
+  StepInfo time_step(Stepper& stepper, State& x, const VecX& tau_cmd, double h);
+  void assemble_bilateral_forces(const VecX& lam, double scale);
+
+  const Model& model_;
+  ConstraintSpec spec_;
+  ConstraintOptions opt_;
+  std::vector<Bil> bil_;
+  std::vector<PointRef> contacts_;  ///< sphere centres
+  std::vector<double> contact_radius_;
+  std::vector<std::string> contact_names_;
+  std::vector<int> limit_force_index_;  ///< joints with a limit, in forces_ order
+  int nb_ = 0;
+  int max_rows_ = 0;
+  double alpha_ = 0, beta2_ = 0;
+
+  Data data_;
+  std::vector<Vec6> Sw_;  ///< world-frame axis of every velocity coordinate
+  std::vector<Vec6> Vb_;  ///< body twists (body frame)
+  std::vector<Vec6> Ab_;  ///< velocity-product accelerations (body frame, wdot = 0)
+
+  // bilateral (nb rows)
+  MatX Psi_, Yb_, Wb_;
+  VecX phi_, gamma_, rhs_, lambda_, mult_, a_, dq_, vfree_;
+  Eigen::LDLT<MatX> ldlt_;
+  Eigen::SelfAdjointEigenSolver<MatX> eig_;
+  // velocity level (up to max_rows_)
+  MatX J_, Y_, W_;
+  VecX b_, c_, p_;
+  std::vector<int> row_kind_, row_ref_;
+  std::vector<Vec3> warm_contact_;  ///< last impulses (n, t1, t2) per contact point
+  std::vector<double> warm_lower_, warm_upper_, contact_gap_;
+  VecX warm_bil_;
+  std::vector<ConstraintForce> forces_;
+  ConstraintReport report_;
+};
+
+/// "point_world", "point_point" or "axis_parallel".
+std::string constraint_type_name(ConstraintType t);
+
+}  // namespace se3

@@ -1,0 +1,20 @@
+// Scene keys of constraints.h (constraints, joint_limits, ground, contacts, constraint_options),
+// read by parse_scene (scene.cpp) through this one entry point.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "se3_sim/constraints.h"
+#include "yaml_lite.h"
+
+namespace se3 {
+
+/// The top-level scene keys handled here.
+const std::vector<std::string>& constraint_scene_keys();
+
+/// Reads one of constraint_scene_keys() into spec. Throws SceneError naming file and line.
+void parse_constraint_key(const std::string& key, const yaml_lite::Node& value,
+                          const std::string& file, ConstraintSpec& spec);
+
+}  // namespace se3
