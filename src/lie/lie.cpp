@@ -237,16 +237,27 @@ Mat6 Inertia::matrix() const {
   return J;
 }
 
-// Expressed in the frame where the body sits at f: x' = R x + p.
-// I'_O' = R I_O R^T - hat(p) hat(R h) - hat(R h) hat(p) - m hat(p)^2.
+// Expressed in the frame where the body sits at f: x' = R x + p. With hat(a) hat(b) =
+// b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
+// (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
+// symmetric result needs only its upper triangle. A hot path of crba, minv and aba.
 Inertia Inertia::transformed(const SE3& f) const {
   Inertia out;
   out.m = m;
   const Vec3 Rh = f.R * h;
-  out.h = Rh + m * f.p;
-  const Mat3 P = hat(f.p), H = hat(Rh);
-  out.I = f.R * I * f.R.transpose() - P * H - H * P - m * P * P;
-  out.I = 0.5 * (out.I + out.I.transpose()).eval();
+  const Vec3& p = f.p;
+  out.h = Rh + m * p;
+  const Mat3 RI = f.R * I;
+  const double d = 2.0 * p.dot(Rh) + m * p.squaredNorm();
+  const Vec3 w = Rh + 0.5 * m * p;  // Rh p^T + p Rh^T + m p p^T = w p^T + p w^T
+  for (int r = 0; r < 3; ++r) {
+    for (int c = r; c < 3; ++c) {
+      const double x = RI.row(r).dot(f.R.row(c)) - (w[r] * p[c] + p[r] * w[c]);
+      out.I(r, c) = x;
+      out.I(c, r) = x;
+    }
+    out.I(r, r) += d;
+  }
   return out;
 }
 

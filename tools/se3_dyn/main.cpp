@@ -118,10 +118,10 @@ const char* kUsage =
     "  eval MODEL.urdf --algo rnea|aba|crba|minv [--floating] [--gravity gx,gy,gz] < in.csv\n"
     "  bench MODEL.urdf [--floating] [--algo fk,rnea,aba,crba,minv] [--json]\n"
     "  simulate (MODEL.urdf [--floating] | --scene SCENE.yaml) [--integrator NAME] [--dt H]\n"
-    "           --duration T [--tol E] [--seed S] [--gravity gx,gy,gz] [--out traj.csv] "
-    "[--json]\n"
-    "  render MODEL.urdf [--floating] [--scene S] [--camera ex,ey,ez[,tx,ty,tz]] --out "
-    "frame.png\n"
+    "           --duration T [--tol E] [--seed S] [--random] [--gravity gx,gy,gz]\n"
+    "           [--out traj.csv] [--json]\n"
+    "  render (MODEL.urdf [--floating] | --scene S) [--camera ex,ey,ez,tx,ty,tz[,f_px]]\n"
+    "         --out frame.png\n"
     "MODEL.urdf may also be chain:N, a generated chain of N bodies.\n";
 
 }  // namespace
@@ -137,6 +137,8 @@ int main(int argc, char** argv) {
     if (cmd == "info") return cmd_info(argc, argv);
     if (cmd == "eval") return cmd_eval(argc, argv);
     if (cmd == "bench") return cmd_bench(argc, argv);
+    if (cmd == "simulate") return cmd_simulate(argc, argv);
+    if (cmd == "render") return cmd_render(argc, argv);
     throw UsageError("unknown command '" + cmd + "' (info, eval, bench, simulate, render)");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "se3_dyn: %s (se3_dyn --help)\n", e.what());
