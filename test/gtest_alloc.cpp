@@ -1,0 +1,203 @@
+// No heap allocation inside a time step. Every heap allocation is counted: global operator
+// new/delete are replaced, and so is the C allocator (Eigen allocates its dynamic matrices with
+// malloc, not with operator new), forwarding to glibc's own entry points. After Model and Data
+// exist, the algorithms must not allocate.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+#include <random>
+
+#include "test_util.h"
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
+
+namespace {
+std::atomic<long> g_allocations{0};
+inline void count() {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+extern "C" {
+void* malloc(std::size_t n) {
+  count();
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t k, std::size_t n) {
+  count();
+  return __libc_calloc(k, n);
+}
+void* realloc(void* p, std::size_t n) {
+  count();
+  return __libc_realloc(p, n);
+}
+void* memalign(std::size_t a, std::size_t n) {
+  count();
+  return __libc_memalign(a, n);
+}
+void* aligned_alloc(std::size_t a, std::size_t n) {
+  count();
+  return __libc_memalign(a, n);
+}
+int posix_memalign(void** out, std::size_t a, std::size_t n) {
+  count();
+  void* p = __libc_memalign(a, n);
+  if (!p) return ENOMEM;
+  *out = p;
+  return 0;
+}
+void free(void* p) {
+  __libc_free(p);
+}
+}
+
+namespace {
+void* new_or_throw(std::size_t n) {
+  if (void* p = __libc_malloc(n == 0 ? 1 : n)) {
+    count();
+    return p;
+  }
+  throw std::bad_alloc();
+}
+void* new_aligned_or_throw(std::size_t n, std::align_val_t a) {
+  if (void* p = __libc_memalign(static_cast<std::size_t>(a), n == 0 ? 1 : n)) {
+    count();
+    return p;
+  }
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t n) {
+  return new_or_throw(n);
+}
+void* operator new[](std::size_t n) {
+  return new_or_throw(n);
+}
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+  count();
+  return __libc_malloc(n == 0 ? 1 : n);
+}
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
+  count();
+  return __libc_malloc(n == 0 ? 1 : n);
+}
+void* operator new(std::size_t n, std::align_val_t a) {
+  return new_aligned_or_throw(n, a);
+}
+void* operator new[](std::size_t n, std::align_val_t a) {
+  return new_aligned_or_throw(n, a);
+}
+void operator delete(void* p) noexcept {
+  __libc_free(p);
+}
+void operator delete[](void* p) noexcept {
+  __libc_free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  __libc_free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  __libc_free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  __libc_free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  __libc_free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+  __libc_free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+  __libc_free(p);
+}
+
+using namespace se3;
+
+namespace {
+
+// Allocations made by f().
+template <class F>
+long allocations_of(F&& f) {
+  const long before = g_allocations.load();
+  f();
+  return g_allocations.load() - before;
+}
+
+void check_no_allocation(const std::string& label, const Model& m) {
+  SCOPED_TRACE(label);
+  Data d(m);
+  std::mt19937_64 rng(201);
+  const se3_test::State s = se3_test::random_state(m, rng);
+  Vec6 fext;
+  fext << 0.1, -0.2, 0.3, 1, 2, 3;
+  // The counter sees both kinds of allocation: an Eigen VecX (malloc) and a std::vector (new).
+  EXPECT_GE(allocations_of([&] {
+              VecX x(m.nv);
+              x.setZero();
+              EXPECT_EQ(x.sum(), 0.0);
+            }),
+            1);
+  EXPECT_GE(allocations_of([&] {
+              std::vector<double> x(m.nv, 1.0);
+              EXPECT_EQ(x.size(), static_cast<size_t>(m.nv));
+            }),
+            1);
+  // From the first call on, each algorithm allocates nothing.
+  for (int round = 0; round < 2; ++round) {
+    EXPECT_EQ(allocations_of([&] { forward_kinematics(m, d, s.base, s.q); }), 0) << "fk";
+    EXPECT_EQ(allocations_of([&] { rnea(m, d, s.base, s.q, s.v, s.u); }), 0) << "rnea";
+    EXPECT_EQ(allocations_of([&] { rnea(m, d, s.base, s.q, s.v, s.u, &fext); }), 0) << "rnea f";
+    EXPECT_EQ(allocations_of([&] { aba(m, d, s.base, s.q, s.v, s.u); }), 0) << "aba";
+    EXPECT_EQ(allocations_of([&] { aba(m, d, s.base, s.q, s.v, s.u, &fext); }), 0) << "aba f";
+    EXPECT_EQ(allocations_of([&] { crba(m, d, s.base, s.q); }), 0) << "crba";
+    EXPECT_EQ(allocations_of([&] { minv(m, d, s.base, s.q); }), 0) << "minv";
+    EXPECT_EQ(allocations_of([&] { bias(m, d, s.base, s.q, s.v); }), 0) << "bias";
+    EXPECT_EQ(allocations_of([&] { kinetic_energy(m, d, s.base, s.q, s.v); }), 0) << "T";
+    EXPECT_EQ(allocations_of([&] { potential_energy(m, d, s.base, s.q); }), 0) << "V";
+    EXPECT_EQ(allocations_of([&] { spatial_momentum(m, d, s.base, s.q, s.v); }), 0) << "h";
+    EXPECT_EQ(allocations_of([&] { center_of_mass(m, d, s.base, s.q); }), 0) << "com";
+  }
+}
+
+}  // namespace
+
+TEST(Alloc, PandaFixed) {
+  check_no_allocation("panda fixed",
+                      model_from_urdf_file(se3_test::robot_path("panda.urdf"), UrdfOptions{}));
+}
+
+TEST(Alloc, Solo12Floating) {
+  UrdfOptions opt;
+  opt.floating = true;
+  check_no_allocation("solo12 floating",
+                      model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt));
+}
+
+TEST(Alloc, Chain50) {
+  check_no_allocation("chain50 fixed", make_chain(50, false));
+  check_no_allocation("chain50 floating", make_chain(50, true));
+}
+
+TEST(Alloc, RomeoFloating) {
+  UrdfOptions opt;
+  opt.floating = true;
+  check_no_allocation("romeo floating",
+                      model_from_urdf_file(se3_test::robot_path("romeo_small.urdf"), opt));
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,490 @@
+// Dynamics on every robot of data/robots and on generated chains, fixed and floating, at random
+// states with fixed seeds: the algorithms against each other (RNEA, ABA, CRBA, D^-1), against
+// the paper's route to D (unit-acceleration RNEA), and against physics (power balance, momentum
+// conservation, gravity as the gradient of the potential), plus D^-1 against a long-double
+// inverse on ill-conditioned chains.
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <type_traits>
+
+#include "test_util.h"
+
+using namespace se3;
+using se3_test::Case;
+using se3_test::max_abs;
+using se3_test::rel_err;
+using se3_test::State;
+
+namespace {
+
+const std::vector<Case>& cases() {
+  static const std::vector<Case> c = se3_test::all_cases();
+  return c;
+}
+
+constexpr int kStates = 3;
+
+// Fourth-order central difference at 0 of a function of one variable.
+template <class F>
+auto central_diff4(F&& g, double h) {
+  using R = std::decay_t<decltype(g(h))>;
+  const R a = g(2 * h), b = g(h), c = g(-h), e = g(-2 * h);
+  return R((-a + 8 * b - 8 * c + e) / (12 * h));
+}
+
+// The state moved along a curve through s whose first derivatives are the true ones:
+// base f0 exp(t V0) (body twist V0), q + t qdot, v + t a. Any quantity depending on (pose, q, v)
+// has, at t = 0, the time derivative it has along the true motion with acceleration a.
+struct Curve {
+  const Model& m;
+  const State& s;
+  const VecX& a;
+  SE3 base(double t) const {
+    if (!m.floating) return s.base;
+    return s.base * exp_se3(t * Vec6(s.v.head<6>()));
+  }
+  VecX q(double t) const { return s.q + t * s.v.tail(m.n); }
+  VecX v(double t) const { return s.v + t * a; }
+};
+
+Model without_gravity(const Model& m) {
+  Model z = m;
+  z.gravity.setZero();
+  return z;
+}
+
+}  // namespace
+
+TEST(Dynamics, RneaOfAbaIsTau) {
+  double worst = 0;
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(101);
+    for (int k = 0; k < kStates; ++k) {
+      const State s = se3_test::random_state(m, rng);
+      const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+      const VecX tau = rnea(m, d, s.base, s.q, s.v, a);
+      const VecX H = bias(m, d, s.base, s.q, s.v);
+      // The terms that cancel in RNEA(ABA(tau)) are of the size of tau, H and D a (large for
+      // light bodies).
+      const double Dmax = max_abs(crba(m, d, s.base, s.q));
+      const double scale = std::max({max_abs(s.u), max_abs(H), Dmax * max_abs(a)});
+      const double err = max_abs(tau - s.u) / scale;
+      worst = std::max(worst, err);
+      EXPECT_LE(err, 1e-12) << c.label;
+      // A free base with no wrench moves freely: rnea's base wrench is zero.
+      if (m.floating) {
+        VecX u = s.u;
+        u.head<6>().setZero();
+        const VecX a0 = aba(m, d, s.base, s.q, s.v, u);
+        EXPECT_LE(max_abs(rnea(m, d, s.base, s.q, s.v, a0).head<6>()), 1e-12 * scale) << c.label;
+        // ABA's external base wrench acts as the base's generalized force.
+        const Vec6 fe = s.u.head<6>();
+        const VecX a1 = aba(m, d, s.base, s.q, s.v, u, &fe);
+        EXPECT_LE(max_abs(a1 - a), 1e-12 * std::max(1.0, max_abs(a))) << c.label;
+        // ... and rnea's f_ext_base is subtracted from the wrench the base needs.
+        const VecX t1 = rnea(m, d, s.base, s.q, s.v, a, &fe);
+        EXPECT_LE(max_abs(t1 - u), 1e-12 * scale) << c.label;
+      }
+    }
+  }
+  std::printf("RNEA(ABA(tau)) - tau: max relative error %.3g\n", worst);
+  RecordProperty("rnea_aba_err", std::to_string(worst));
+}
+
+TEST(Dynamics, EquationsOfMotion) {
+  double worst_eom = 0, worst_inv = 0, worst_sym = 0, worst_minv = 0, worst_cols = 0;
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(102);
+    for (int k = 0; k < kStates; ++k) {
+      const State s = se3_test::random_state(m, rng);
+      const MatX D = crba(m, d, s.base, s.q);
+      const MatX Di = minv(m, d, s.base, s.q);
+      const VecX H = bias(m, d, s.base, s.q, s.v);
+      const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+      // D a + H = tau.
+      // Rounding in D a is relative to |D| |a| (large for light bodies).
+      const double scale = std::max({max_abs(s.u), max_abs(H), max_abs(D) * max_abs(a)});
+      const double eom = max_abs(D * a + H - s.u) / scale;
+      worst_eom = std::max(worst_eom, eom);
+      EXPECT_LE(eom, 1e-12) << c.label;
+      // D symmetric positive definite.
+      const double sym = max_abs(D - D.transpose()) / max_abs(D);
+      worst_sym = std::max(worst_sym, sym);
+      EXPECT_LE(sym, 1e-14) << c.label;
+      const Eigen::LLT<MatX> llt(D);
+      ASSERT_EQ(llt.info(), Eigen::Success) << c.label;
+      EXPECT_GT(llt.matrixL().toDenseMatrix().diagonal().minCoeff(), 0.0) << c.label;
+      // D D^-1 = I; minv equals D's Cholesky inverse and is symmetric.
+      const MatX I = MatX::Identity(m.nv, m.nv);
+      const Eigen::JacobiSVD<MatX> svd(D);
+      const double cond = svd.singularValues()(0) / svd.singularValues()(m.nv - 1);
+      const double inv = max_abs(D * Di - I);
+      worst_inv = std::max(worst_inv, inv / cond);
+      EXPECT_LE(inv, std::max(1e-12, 1e-15 * 20 * cond)) << c.label << " cond " << cond;
+      const MatX Dinv_llt = llt.solve(I);
+      const double mi = rel_err(Di, Dinv_llt);
+      worst_minv = std::max(worst_minv, mi / cond);
+      EXPECT_LE(mi, std::max(1e-12, 1e-15 * 20 * cond)) << c.label << " cond " << cond;
+      EXPECT_LE(max_abs(Di - Di.transpose()), 1e-14 * max_abs(Di)) << c.label;
+      // The paper's route to D (section 6.1): column j is RNEA with unit acceleration e_j, no
+      // velocity and no gravity.
+      const Model mz = without_gravity(m);
+      Data dz(mz);
+      const VecX zero = VecX::Zero(m.nv);
+      double cols = 0;
+      for (int j = 0; j < m.nv; ++j) {
+        const VecX e = VecX::Unit(m.nv, j);
+        cols = std::max(cols, max_abs(rnea(mz, dz, s.base, s.q, zero, e) - D.col(j)));
+      }
+      cols /= max_abs(D);
+      worst_cols = std::max(worst_cols, cols);
+      EXPECT_LE(cols, 1e-13) << c.label;
+      // ABA without velocity, gravity or torque but one unit torque is a column of D^-1.
+      const int j = static_cast<int>(rng() % m.nv);
+      const VecX aj = aba(mz, dz, s.base, s.q, zero, VecX::Unit(m.nv, j));
+      EXPECT_LE(rel_err(aj, Di.col(j)), std::max(1e-12, 1e-15 * 20 * cond)) << c.label;
+    }
+  }
+  std::printf(
+      "D a + H - tau: %.3g rel; D D^-1 - I: %.3g x cond; minv vs LLT inverse: %.3g x cond; "
+      "asymmetry %.3g; CRBA vs unit-acceleration RNEA: %.3g rel\n",
+      worst_eom, worst_inv, worst_minv, worst_sym, worst_cols);
+  RecordProperty("eom_err", std::to_string(worst_eom));
+}
+
+TEST(Dynamics, KineticEnergy) {
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(103);
+    for (int k = 0; k < kStates; ++k) {
+      const State s = se3_test::random_state(m, rng);
+      const MatX D = crba(m, d, s.base, s.q);
+      const double T = kinetic_energy(m, d, s.base, s.q, s.v);
+      EXPECT_NEAR(T, 0.5 * s.v.dot(D * s.v), 1e-13 * T) << c.label;
+      EXPECT_GT(T, 0.0);
+      // The momentum is D v, seen as a wrench: h . V0 ... checked through its own power below;
+      // here: sum of body momenta in the world equals the base-frame momentum D.topRows(6) v.
+      if (m.floating) {
+        const Vec6 h = spatial_momentum(m, d, s.base, s.q, s.v);
+        const Vec6 hb = D.topRows<6>() * s.v;
+        EXPECT_LE(max_abs(h - act_force(s.base, hb)), 1e-13 * std::max(1.0, max_abs(h))) << c.label;
+      }
+    }
+  }
+}
+
+// d(T + V)/dt = v^T tau (no damping), by a 4th-order central difference of the energy along the
+// curve through the state with the ABA acceleration.
+TEST(Dynamics, PowerBalance) {
+  double worst = 0;
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(104);
+    for (int k = 0; k < kStates; ++k) {
+      const State s = se3_test::random_state(m, rng);
+      const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+      const Curve cv{m, s, a};
+      auto energy = [&](double t) {
+        const SE3 f = cv.base(t);
+        const VecX q = cv.q(t);
+        return kinetic_energy(m, d, f, q, cv.v(t)) + potential_energy(m, d, f, q);
+      };
+      const double dEdt = central_diff4(energy, 1e-4);
+      const double power = s.v.dot(s.u);
+      // Scale: the sizes of the powers that have to cancel.
+      const VecX H = bias(m, d, s.base, s.q, s.v);
+      const double scale = s.v.cwiseAbs().dot(s.u.cwiseAbs() + H.cwiseAbs());
+      const double err = std::abs(dEdt - power) / scale;
+      worst = std::max(worst, err);
+      EXPECT_LE(err, 1e-7) << c.label << ": dE/dt " << dEdt << " v.tau " << power;
+    }
+  }
+  std::printf("power balance d(T+V)/dt - v.tau: max relative error %.3g\n", worst);
+  RecordProperty("power_balance_err", std::to_string(worst));
+}
+
+// Gravity: at rest and without acceleration, RNEA gives the gradient of the potential energy
+// (joint coordinates and the base's body-frame motions f0 exp(e E_k)).
+TEST(Dynamics, GravityIsTheGradientOfThePotential) {
+  double worst = 0;
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(105);
+    const State s = se3_test::random_state(m, rng);
+    const VecX zero = VecX::Zero(m.nv);
+    const VecX G = rnea(m, d, s.base, s.q, zero, zero);
+    VecX grad(m.nv);
+    const int off = m.floating ? 6 : 0;
+    for (int k = 0; k < m.nv; ++k) {
+      auto V = [&](double e) {
+        if (k < off) return potential_energy(m, d, s.base * exp_se3(e * Vec6::Unit(k)), s.q);
+        return potential_energy(m, d, s.base, s.q + e * VecX::Unit(m.n, k - off));
+      };
+      grad[k] = central_diff4(V, 1e-3);
+    }
+    const double err = max_abs(G - grad) / std::max(1e-3, max_abs(G));
+    worst = std::max(worst, err);
+    EXPECT_LE(err, 1e-9) << c.label;
+  }
+  std::printf("gravity vs gradient of the potential: max relative error %.3g\n", worst);
+}
+
+// Total spatial momentum of a free-floating system: its rate is the external wrench. Without
+// gravity and base wrench it is conserved whatever the joint torques.
+TEST(Dynamics, MomentumConservation) {
+  double worst_exact = 0, worst_fd = 0;
+  for (const Case& c : cases()) {
+    if (!c.model.floating) continue;
+    const Model m = without_gravity(c.model);
+    Data d(m);
+    std::mt19937_64 rng(106);
+    for (int k = 0; k < kStates; ++k) {
+      State s = se3_test::random_state(m, rng);
+      for (bool with_wrench : {false, true}) {
+        if (!with_wrench) s.u.head<6>().setZero();
+        const Vec6 Fb = s.u.head<6>();
+        const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+        // Exact: dh/dt = sum_i Ad*_{oMb_i^-1} (I_i A_i - ad*_{V_i} I_i V_i), with the body
+        // twists V_i and accelerations A_i recomputed here from ABA's generalized accelerations
+        // (eqs. 33-35, body frames, written independently of the library's Data).
+        std::vector<SE3> oMb(m.n + 1);
+        std::vector<Vec6> V(m.n + 1), A(m.n + 1);
+        oMb[0] = s.base;
+        V[0] = s.v.head<6>();
+        A[0] = a.head<6>();
+        for (int i = 1; i <= m.n; ++i) {
+          const double qi = s.q[i - 1], qd = s.v[5 + i], qdd = a[5 + i];
+          Vec6 S = Vec6::Zero();
+          SE3 J;
+          if (m.joint_type[i] == JointType::Revolute) {
+            S[2] = 1;
+            J.R = Eigen::AngleAxisd(qi, Vec3::UnitZ()).toRotationMatrix();
+          } else {
+            S[5] = 1;
+            J.p = Vec3(0, 0, qi);
+          }
+          const SE3 X = m.X_tree[i] * J;
+          oMb[i] = oMb[m.parent[i]] * X;
+          V[i] = act_inv_motion(X, V[m.parent[i]]) + S * qd;
+          A[i] = act_inv_motion(X, A[m.parent[i]]) + S * qdd + cross_motion(V[i], S * qd);
+        }
+        Vec6 rate = Vec6::Zero();
+        double scale = 0;
+        for (int i = 0; i <= m.n; ++i) {
+          const Inertia& I = m.inertia[i];
+          const Vec6 w = act_force(oMb[i], I * A[i] + cross_force(V[i], I * V[i]));
+          rate += w;
+          scale = std::max(scale, max_abs(w));
+        }
+        const Vec6 expected = act_force(s.base, Fb);
+        scale = std::max(scale, max_abs(expected));
+        const double e1 = max_abs(rate - expected) / scale;
+        worst_exact = std::max(worst_exact, e1);
+        EXPECT_LE(e1, 1e-11) << c.label;
+        // Finite differences of spatial_momentum along the motion.
+        const Curve cv{m, s, a};
+        auto h = [&](double t) {
+          return Vec6(spatial_momentum(m, d, cv.base(t), cv.q(t), cv.v(t)));
+        };
+        const Vec6 hdot = central_diff4(h, 1e-4);
+        const double e2 = max_abs(hdot - expected) / scale;
+        worst_fd = std::max(worst_fd, e2);
+        EXPECT_LE(e2, 1e-7) << c.label;
+      }
+    }
+  }
+  std::printf("momentum rate - external wrench: exact %.3g, finite differences %.3g (relative)\n",
+              worst_exact, worst_fd);
+  RecordProperty("momentum_err", std::to_string(worst_exact));
+}
+
+// With gravity the momentum changes by the weight: dh/dt = [c x M g; M g] + base wrench.
+TEST(Dynamics, MomentumRateUnderGravity) {
+  for (const Case& c : cases()) {
+    if (!c.model.floating) continue;
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(107);
+    const State s = se3_test::random_state(m, rng);
+    const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+    const Curve cv{m, s, a};
+    auto h = [&](double t) { return Vec6(spatial_momentum(m, d, cv.base(t), cv.q(t), cv.v(t))); };
+    const Vec6 hdot = central_diff4(h, 1e-4);
+    const double M = m.total_mass();
+    const Vec3 com = center_of_mass(m, d, s.base, s.q);
+    Vec6 expected = act_force(s.base, Vec6(s.u.head<6>()));
+    expected.head<3>() += com.cross(M * m.gravity);
+    expected.tail<3>() += M * m.gravity;
+    EXPECT_LE(max_abs(hdot - expected), 1e-7 * std::max(max_abs(expected), M * 9.81)) << c.label;
+  }
+}
+
+namespace {
+
+using LD = long double;
+using MatXL = Eigen::Matrix<LD, Eigen::Dynamic, Eigen::Dynamic>;
+using Mat3L = Eigen::Matrix<LD, 3, 3>;
+using Vec3L = Eigen::Matrix<LD, 3, 1>;
+using Mat6L = Eigen::Matrix<LD, 6, 6>;
+
+Mat3L hat_ld(const Vec3L& a) {
+  Mat3L m;
+  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return m;
+}
+
+// The mass matrix assembled in long double straight from the model, independently of crba:
+// D = sum_i J_i^T I_i J_i with world-frame body Jacobians J_i and world-frame inertias I_i.
+MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
+  const int off = m.floating ? 6 : 0;
+  std::vector<Mat3L> R(m.n + 1);
+  std::vector<Vec3L> p(m.n + 1);
+  R[0] = base.R.cast<LD>();
+  p[0] = base.p.cast<LD>();
+  for (int i = 1; i <= m.n; ++i) {
+    const int a = m.parent[i];
+    const Mat3L Rt = m.X_tree[i].R.cast<LD>();
+    const Vec3L pt = m.X_tree[i].p.cast<LD>();
+    Mat3L Rj = Mat3L::Identity();
+    Vec3L pj = Vec3L::Zero();
+    const LD qi = q[i - 1];
+    if (m.joint_type[i] == JointType::Revolute) {
+      Rj << std::cos(qi), -std::sin(qi), 0, std::sin(qi), std::cos(qi), 0, 0, 0, 1;
+    } else {
+      pj << 0, 0, qi;
+    }
+    R[i] = R[a] * Rt * Rj;
+    p[i] = R[a] * (Rt * pj + pt) + p[a];
+  }
+  MatXL D = MatXL::Zero(m.nv, m.nv);
+  for (int i = m.floating ? 0 : 1; i <= m.n; ++i) {
+    const Inertia& I = m.inertia[i];
+    const Mat3L H = hat_ld(I.h.cast<LD>());
+    Mat6L Jb;
+    Jb << I.I.cast<LD>(), H, -H, static_cast<LD>(I.m) * Mat3L::Identity();
+    Mat6L Adinv;
+    Adinv << R[i].transpose(), Mat3L::Zero(), -R[i].transpose() * hat_ld(p[i]), R[i].transpose();
+    const Mat6L Iw = Adinv.transpose() * Jb * Adinv;
+    Eigen::Matrix<LD, 6, Eigen::Dynamic> J = Eigen::Matrix<LD, 6, Eigen::Dynamic>::Zero(6, m.nv);
+    if (m.floating) {
+      J.leftCols<6>() << R[0], Mat3L::Zero(), hat_ld(p[0]) * R[0], R[0];
+    }
+    for (int j = i; j >= 1; j = m.parent[j]) {
+      const Vec3L z = R[j].col(2);
+      if (m.joint_type[j] == JointType::Revolute) {
+        J.col(off + j - 1) << z, p[j].cross(z);
+      } else {
+        J.col(off + j - 1) << Vec3L::Zero(), z;
+      }
+    }
+    D += J.transpose() * Iw * J;
+  }
+  return D;
+}
+
+struct MinvAccuracy {
+  double cond = 0;       ///< largest cond(D) seen
+  double err_exact = 0;  ///< minv vs the long-double inverse of the long-double D
+  double err_crba = 0;   ///< minv vs the long-double inverse of crba's D
+  double err_llt = 0;    ///< double LLT inverse of crba's D vs the long-double inverse of it
+};
+
+// minv on a model against D^-1 computed in long double, at a few random states.
+MinvAccuracy minv_vs_long_double(const Model& m, const std::string& label) {
+  Data d(m);
+  std::mt19937_64 rng(108);
+  MinvAccuracy acc;
+  for (int k = 0; k < kStates; ++k) {
+    const State s = se3_test::random_state(m, rng);
+    const MatX D = crba(m, d, s.base, s.q);
+    const MatX Di = minv(m, d, s.base, s.q);
+    const MatXL DL = mass_matrix_long_double(m, s.base, s.q);
+    const MatX exact_inv = MatXL(DL.fullPivLu().inverse()).cast<double>();
+    const MatX crba_inv = MatXL(D.cast<LD>().fullPivLu().inverse()).cast<double>();
+    const Eigen::JacobiSVD<MatXL> svd(DL);
+    const double cond =
+        static_cast<double>(svd.singularValues()(0) / svd.singularValues()(m.nv - 1));
+    const double crba_err =
+        static_cast<double>((D.cast<LD>() - DL).cwiseAbs().maxCoeff() / DL.cwiseAbs().maxCoeff());
+    const double e_exact = rel_err(Di, exact_inv);
+    const double e_crba = rel_err(Di, crba_inv);
+    const double e_llt =
+        rel_err(MatX(Eigen::LLT<MatX>(D).solve(MatX::Identity(m.nv, m.nv))), crba_inv);
+    std::printf(
+        "%-34s nv %3d  cond(D) %.3e  minv vs long-double D^-1: %.3e;  vs long-double "
+        "inverse of crba's D: %.3e (double LLT of it: %.3e; crba's D rel. error "
+        "%.1e)\n",
+        label.c_str(), m.nv, cond, e_exact, e_crba, e_llt, crba_err);
+    EXPECT_LE(crba_err, 1e-14) << label;
+    acc.cond = std::max(acc.cond, cond);
+    acc.err_exact = std::max(acc.err_exact, e_exact);
+    acc.err_crba = std::max(acc.err_crba, e_crba);
+    acc.err_llt = std::max(acc.err_llt, e_llt);
+  }
+  return acc;
+}
+
+// The reference's own rounding: crba's D carries relative errors of a few eps, which an
+// inverse amplifies by up to cond(D); minv cannot agree with crba's D^-1 better than that.
+void expect_accurate(const MinvAccuracy& a, const std::string& label) {
+  EXPECT_LE(a.err_exact, 1e-9) << label << " cond " << a.cond;
+  EXPECT_LE(a.err_crba, std::max(1e-9, 1e-15 * a.cond)) << label << " cond " << a.cond;
+}
+
+}  // namespace
+
+// Link masses spanning four orders of magnitude (1e-2 .. 1e2 kg).
+TEST(Dynamics, MinvAccuracyMassesOverFourDecades) {
+  for (bool floating : {false, true}) {
+    const std::string label =
+        std::string("chain44 {1e-2,1,1e2} ") + (floating ? "floating" : "fixed");
+    const MinvAccuracy a = minv_vs_long_double(make_chain(44, floating, {1e-2, 1, 100}), label);
+    expect_accurate(a, label);
+    const std::string key = floating ? "_floating" : "_fixed";
+    RecordProperty("cond_4dec" + key, std::to_string(a.cond));
+    RecordProperty("minv_err_4dec" + key, std::to_string(a.err_exact));
+  }
+}
+
+// cond(D) about 1e7, as for the 50-dof humanoid the issue cites.
+TEST(Dynamics, MinvAccuracyCond1e7) {
+  const std::string label = "chain20 {1e-2,1,1e2} floating";
+  const MinvAccuracy a = minv_vs_long_double(make_chain(20, true, {1e-2, 1, 100}), label);
+  EXPECT_GE(a.cond, 5e6);
+  EXPECT_LE(a.cond, 1e8);
+  expect_accurate(a, label);
+  RecordProperty("cond_1e7", std::to_string(a.cond));
+  RecordProperty("minv_err_1e7", std::to_string(a.err_exact));
+}
+
+// The long-double mass matrix of this file agrees with crba on every model (so it is a fair
+// reference above).
+TEST(Dynamics, LongDoubleMassMatrixMatchesCrba) {
+  for (const Case& c : cases()) {
+    const Model& m = c.model;
+    Data d(m);
+    std::mt19937_64 rng(109);
+    const State s = se3_test::random_state(m, rng);
+    const MatX D = crba(m, d, s.base, s.q);
+    const MatX DL = mass_matrix_long_double(m, s.base, s.q).cast<double>();
+    EXPECT_LE(rel_err(D, DL), 1e-13) << c.label;
+  }
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
