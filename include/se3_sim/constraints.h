@@ -73,6 +73,7 @@ struct BilateralConstraint {
 
 /// A sphere (radius >= 0; 0 = a point) on a link that may touch the ground plane.
 struct ContactPoint {
+  std::string name;  ///< for reports and markers ("" = the link name and an index)
   std::string link;
   Vec3 position = Vec3::Zero();  ///< centre in the link frame
   double radius = 0;
@@ -116,7 +117,9 @@ struct ConstraintSpec {
 struct ConstraintForce {
   enum Kind { Bilateral = 0, Limit = 1, Contact = 2 };
   Kind kind = Bilateral;
-  std::string name;            ///< constraint name, "limit:<joint>" or "contact:<link>:<k>"
+  /// The constraint's name, "limit:<joint>", "contact:<name>" (scene contacts) or
+  /// "contact:<link>:<k>" (unnamed and collision-geometry points).
+  std::string name;
   int body = 0;                ///< body the force acts on (limits: the joint's body)
   Vec3 point = Vec3::Zero();   ///< application point (world)
   Vec3 force = Vec3::Zero();   ///< N, on `body` (a point_point pair's other body gets -force)

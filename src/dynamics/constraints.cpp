@@ -111,7 +111,9 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
       contacts_.push_back(resolve(c.link, c.position, "contact"));
       if (contacts_.back().body < 0) throw ModelError("contact needs a link of the model");
       contact_radius_.push_back(c.radius);
-      contact_names_.push_back("contact:" + c.link + ":" + std::to_string(idx++));
+      contact_names_.push_back("contact:" +
+                               (c.name.empty() ? c.link + ":" + std::to_string(idx) : c.name));
+      ++idx;
     }
     if (spec.contacts_from_collisions) {
       for (size_t g = 0; g < model.collisions.size(); ++g) {

@@ -194,6 +194,7 @@ void parse_constraint_key(const std::string& key, const Node& v, const std::stri
       r.map(kv.second, where);
       r.only(kv.second, where, {"link", "position", "radius"});
       ContactPoint c;
+      c.name = kv.first;
       for (const auto& p : kv.second.map) {
         const std::string k = where + "." + p.first;
         if (p.first == "link") {
