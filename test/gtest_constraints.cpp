@@ -264,8 +264,6 @@ TEST(Constraints, RedundantConstraintsGiveFiniteMultipliersAndAReport) {
   EXPECT_GT(sim->constraints()->report().singular_solves, 0u);
   EXPECT_EQ(sim->constraints()->report().rank, 2);
   EXPECT_TRUE(sim->constraints()->lambda().allFinite());
-
-  // Contact: PGS copes with 4 coplanar corners (12 rows on 6 dof).
 }
 
 TEST(Constraints, JointLimitsHoldUnderLargeTorques) {
