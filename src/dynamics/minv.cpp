@@ -96,9 +96,11 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     const Mat6 Omega0 = Adf.transpose() * data.IA[0] * Adf;
     const Eigen::LLT<Mat6> llt(Omega0);
     Data::Mat6X& P0 = data.Pm[data.P_slot[0]];
-    P0.noalias() = -(Adf.transpose() * F);
+    const Mat6 minus_AdT = -Adf.transpose();
+    P0.noalias() = minus_AdT * F;
     P0.leftCols<6>() += Mat6::Identity();
-    Mi.leftCols<6>() = llt.solve(P0).transpose();
+    llt.solveInPlace(P0);
+    Mi.leftCols<6>() = P0.transpose();
     P0.noalias() = Adf * Mi.leftCols<6>().transpose();  // base accelerations, world frame
   }
   for (int i = 1; i <= model.n; ++i) {

@@ -179,16 +179,17 @@ Mat3 dexp_coupling(const Vec3& a, const Vec3& l) {
   double c1, c2, c3;
   if (t < kSeries) {
     // c1 = (t - sin t)/t^3, c2 = (t^2/2 + cos t - 1)/t^4,
-    // c3 = (c2 - 3 (t - sin t - t^3/6)/t^5) / 2, by their series.
+    // c3 = (c2 + 3 (t - sin t - t^3/6)/t^5) / 2 = (2t - 3 sin t + t cos t) / (2 t^5), by their
+    // series (c3 -> 1/120 = 1/5!, the ad^4 coefficient).
     c1 = 1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0));
     c2 = 1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0));
     const double e = -1.0 / 120.0 + t2 * (1.0 / 5040.0 - t2 * (1.0 / 362880.0 - t2 / 39916800.0));
-    c3 = 0.5 * (c2 - 3.0 * e);
+    c3 = 0.5 * (c2 + 3.0 * e);
   } else {
     const double s = std::sin(t), c = std::cos(t);
     c1 = (t - s) / (t2 * t);
     c2 = (0.5 * t2 + c - 1.0) / (t2 * t2);
-    c3 = 0.5 * (c2 - 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t));
+    c3 = 0.5 * (c2 + 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t));
   }
   const Mat3 A = hat(a), L = hat(l);
   const Mat3 AL = A * L, LA = L * A, ALA = AL * A;

@@ -150,8 +150,10 @@ class RendererNode {
     }
     if (xml == failed_xml_) return;
     try {
+      // Bodies are posed from TF, so the base type does not matter here; a fixed base also
+      // accepts robots whose root link is massless (which a free base must not be).
       se3::UrdfOptions opt;
-      opt.floating = true;
+      opt.floating = false;
       auto m = std::make_unique<se3::Model>(se3::model_from_urdf_string(xml, opt));
       renderer_->set_model(*m);
       poses_.assign(m->parent.size(),
