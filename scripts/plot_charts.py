@@ -74,7 +74,7 @@ def work_precision(data_dir, out_dir, scene):
 def energy(data_dir, out_dir):
     rows = read(os.path.join(data_dir, "energy.csv"))
     panels = [
-        ("pendulum", "energy_err", "double pendulum (gravity), dt = 0.01 s: max |E - E0| / T0"),
+        ("pendulum", "energy_err", "double pendulum (gravity, no damping), dt = 0.002 s: max |E - E0| / T0"),
         ("free_body", "energy_err", "free asymmetric body, dt = 0.05 s: max |E - E0| / T0"),
         ("free_body", "momentum_err", "free asymmetric body, dt = 0.05 s: max |h - h0| / |h0|"),
     ]

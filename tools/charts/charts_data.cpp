@@ -513,7 +513,7 @@ int main(int argc, char** argv) {
         const Scene scene = load_scene(root + "/config/scenes/pendulum.yaml");
         const Model m = scene_model(scene);
         const State x0 = scene_state(scene, m);
-        energy_run("pendulum", m, x0, 0.01, T,
+        energy_run("pendulum", m, x0, 0.002, T,
                    {"euler", "symplectic_euler", "rkmk4", "rkmk45", "variational"}, false, f);
       }
       {
