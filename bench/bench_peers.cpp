@@ -23,6 +23,7 @@
 #ifdef SE3_SIM_HAVE_DART
 #include <dart/dynamics/DegreeOfFreedom.hpp>
 #include <dart/dynamics/FreeJoint.hpp>
+#include <dart/dynamics/Inertia.hpp>
 #include <dart/dynamics/Joint.hpp>
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/utils/urdf/DartLoader.hpp>
@@ -76,6 +77,7 @@ struct Case {
   bool floating;
   std::vector<std::pair<std::string, double>> locked;
   std::string kdl_root, kdl_tip;  ///< chain for KDL ("" = no KDL)
+  bool kdl_whole = true;          ///< the KDL chain holds every body of the model
 };
 
 struct Row {
@@ -120,8 +122,11 @@ Row run(const Case& c) {
     const std::string path = "/tmp/se3_sim_bench_peers.urdf";
     std::ofstream(path) << std::regex_replace(c.urdf_text, geom, "");
     using dart::utils::DartLoader;
-    DartLoader::Options dopt(nullptr, c.floating ? DartLoader::RootJointType::FLOATING
-                                                 : DartLoader::RootJointType::FIXED);
+    // Links without <inertial> are massless in URDF; DART's default would give them mass 1.
+    DartLoader::Options dopt(
+        nullptr,
+        c.floating ? DartLoader::RootJointType::FLOATING : DartLoader::RootJointType::FIXED,
+        dart::dynamics::Inertia(0.0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()));
     DartLoader loader(dopt);
     auto skel = loader.parseSkeleton(dart::common::Uri::createFromPath(path));
     if (skel && static_cast<int>(skel->getNumDofs()) == m.nv + static_cast<int>(c.locked.size())) {
@@ -208,6 +213,8 @@ Row run(const Case& c) {
 #endif
 #ifdef SE3_SIM_HAVE_KDL
   if (!c.kdl_root.empty() && !c.floating) {
+    // KDL's chain ends at kdl_tip: links beyond it (panda's hand and fingers) are not in KDL's
+    // model, so its answers are compared only where the chain holds the whole robot.
     KDL::Tree tree;
     KDL::Chain chain;
     if (kdl_parser::treeFromString(c.urdf_text, tree) &&
@@ -240,10 +247,14 @@ Row run(const Case& c) {
         jv(i) = v[0][i];
         ja(i) = a[0][i];
       }
-      id.CartToJnt(jq, jv, ja, wr, jt);
-      row.err_kdl = std::max(row.err_kdl, rel(rnea(m, d, base[0], q[0], v[0], a[0]), jt.data));
-      dyn.JntToMass(jq, H);
-      row.err_kdl = std::max(row.err_kdl, rel(crba(m, d, base[0], q[0]), H.data));
+      if (c.kdl_whole) {
+        id.CartToJnt(jq, jv, ja, wr, jt);
+        row.err_kdl = std::max(row.err_kdl, rel(rnea(m, d, base[0], q[0], v[0], a[0]), jt.data));
+        dyn.JntToMass(jq, H);
+        row.err_kdl = std::max(row.err_kdl, rel(crba(m, d, base[0], q[0]), H.data));
+      } else {
+        row.err_kdl = NAN;
+      }
     }
   }
 #endif
@@ -254,6 +265,12 @@ std::string fmt(double x) {
   if (std::isnan(x)) return "—";
   char b[32];
   std::snprintf(b, sizeof b, x >= 1e5 ? "%.3g" : "%.0f", x);
+  return b;
+}
+
+std::string fmt_e(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1e", x);
   return b;
 }
 
@@ -270,7 +287,7 @@ int main(int argc, char** argv) {
   std::vector<Case> cases = {
       {"UR5", read_text(dir + "/ur5_robot.urdf"), false, {}, "base_link", "ee_link"},
       {"Panda (7, fingers off)", read_text(dir + "/panda.urdf"), false, fingers, "panda_link0",
-       "panda_link8"},
+       "panda_link8", false},
       {"KUKA iiwa",
        read_text(dir + "/kuka_iiwa.urdf"),
        false,
@@ -297,13 +314,19 @@ int main(int argc, char** argv) {
         std::snprintf(ratio_d, sizeof ratio_d, "%.1f×", r.dart[k] / r.ours[k]);
       if (!std::isnan(r.kdl[k]))
         std::snprintf(ratio_k, sizeof ratio_k, "%.1f×", r.kdl[k] / r.ours[k]);
-      std::printf("| %s | %d | %s | %s | %s | %s | %s | %s |\n", k == 0 ? r.label.c_str() : "",
+      char diff[64] = "";
+      if (k == 0) {
+        std::snprintf(
+            diff, sizeof diff, "%s / %s", std::isnan(r.dart[0]) ? "—" : fmt_e(r.err_dart).c_str(),
+            std::isnan(r.kdl[0]) || std::isnan(r.err_kdl) ? "—" : fmt_e(r.err_kdl).c_str());
+      }
+      std::printf("| %s | %d | %s | %s | %s | %s | %s | %s | %s |\n", k == 0 ? r.label.c_str() : "",
                   r.nv, kAlgo[k], fmt(r.ours[k]).c_str(), fmt(r.dart[k]).c_str(),
-                  fmt(r.kdl[k]).c_str(), ratio_d, ratio_k);
+                  fmt(r.kdl[k]).c_str(), ratio_d, ratio_k, diff);
     }
     std::fflush(stdout);
     worst_dart = std::max(worst_dart, r.err_dart);
-    worst_kdl = std::max(worst_kdl, r.err_kdl);
+    if (!std::isnan(r.err_kdl)) worst_kdl = std::max(worst_kdl, r.err_kdl);
   }
   std::printf(
       "\nlargest relative difference of the answers (RNEA, ABA, mass matrix; max norm): "

@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "se3_sim/ChainState.h"
+#include "se3_sim/ConstraintForces.h"
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
@@ -83,6 +84,7 @@ class SimulatorNode {
     chain_pub_ = nh_.advertise<se3_sim::ChainState>("chain_state", 10);
     stats_pub_ = nh_.advertise<se3_sim::SimStats>("sim_stats", 10);
     marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("sim_markers", 10);
+    constraint_pub_ = nh_.advertise<se3_sim::ConstraintForces>("constraint_forces", 10);
     if (use_sim_time_) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
     cmd_sub_ = nh_.subscribe("torque_command", 20, &SimulatorNode::on_command, this,
@@ -376,11 +378,70 @@ class SimulatorNode {
     return true;
   }
 
+  // Constraint and contact forces as a message and as arrows on sim_markers (namespace
+  // "constraint"): one arrow per constraint row group, from the application point along the
+  // force, 0.3 m for a force equal to the robot's weight (at least 2 cm, at most 0.6 m).
+  void add_constraint_forces(const se3::ConstraintSystem& sys, const se3::Model& m,
+                             const std_msgs::Header& header, se3_sim::ConstraintForces& cf,
+                             visualization_msgs::MarkerArray& markers) const {
+    cf.header = header;
+    const double weight = std::max(m.total_mass() * 9.81, 1e-6);
+    const std::vector<se3::ConstraintForce>& forces = sys.forces();
+    for (size_t k = 0; k < forces.size(); ++k) {
+      const se3::ConstraintForce& f = forces[k];
+      const bool ok = f.point.allFinite() && f.force.allFinite() && f.torque.allFinite();
+      geometry_msgs::Point p;
+      geometry_msgs::Vector3 F, T;
+      if (ok) {
+        p.x = f.point.x(), p.y = f.point.y(), p.z = f.point.z();
+        F.x = f.force.x(), F.y = f.force.y(), F.z = f.force.z();
+        T.x = f.torque.x(), T.y = f.torque.y(), T.z = f.torque.z();
+      }
+      cf.name.push_back(f.name);
+      cf.kind.push_back(static_cast<uint8_t>(f.kind));
+      cf.link.push_back(f.body >= 0 && f.body <= m.n ? m.body_name[f.body] : std::string());
+      cf.point.push_back(p);
+      cf.force.push_back(F);
+      cf.torque.push_back(T);
+      cf.joint_force.push_back(finite_or_zero(f.joint_force));
+      cf.gap.push_back(finite_or_zero(f.gap));
+      cf.active.push_back(ok && f.active);
+
+      visualization_msgs::Marker a;
+      a.header = header;
+      a.ns = "constraint";
+      a.id = static_cast<int>(k);
+      a.type = visualization_msgs::Marker::ARROW;
+      const double mag = ok ? f.force.norm() : 0.0;
+      if (!(ok && f.active) || mag <= 0) {
+        a.action = visualization_msgs::Marker::DELETE;
+        markers.markers.push_back(a);
+        continue;
+      }
+      a.action = visualization_msgs::Marker::ADD;
+      const double len = std::min(0.6, std::max(0.02, 0.3 * mag / weight));
+      const se3::Vec3 tip = f.point + f.force / mag * len;
+      geometry_msgs::Point p1;
+      p1.x = tip.x(), p1.y = tip.y(), p1.z = tip.z();
+      a.points = {p, p1};
+      a.pose.orientation.w = 1;
+      a.scale.x = 0.008;
+      a.scale.y = 0.016;
+      a.scale.z = 0.024;
+      a.color.g = 0.9;
+      a.color.b = f.kind == se3::ConstraintForce::Contact ? 0.2 : 0.9;
+      a.color.a = 1.0;
+      markers.markers.push_back(a);
+    }
+  }
+
   void publish(Clock::time_point now) {
     sensor_msgs::JointState js;
     se3_sim::ChainState cs;
     se3_sim::SimStats st;
     visualization_msgs::MarkerArray markers;
+    se3_sim::ConstraintForces cf;
+    bool constrained = false;
     std::vector<geometry_msgs::TransformStamped> tfs;
     rosgraph_msgs::Clock clock_msg;
     {
@@ -502,8 +563,13 @@ class SimulatorNode {
         a.color.a = 1.0;
         markers.markers.push_back(a);
       }
+      if (const se3::ConstraintSystem* cs_sys = sim_->constraints()) {
+        constrained = true;
+        add_constraint_forces(*cs_sys, m, com.header, cf, markers);
+      }
     }
     if (use_sim_time_) clock_pub_.publish(clock_msg);
+    if (constrained) constraint_pub_.publish(cf);
     joint_pub_.publish(js);
     tf_->sendTransform(tfs);
     chain_pub_.publish(cs);
@@ -512,7 +578,7 @@ class SimulatorNode {
   }
 
   ros::NodeHandle nh_, pnh_;
-  ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_;
+  ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_, constraint_pub_;
   ros::Subscriber cmd_sub_;
   ros::ServiceServer srv_reset_, srv_pause_, srv_resume_, srv_step_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
