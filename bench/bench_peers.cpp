@@ -303,7 +303,7 @@ int main(int argc, char** argv) {
   };
   std::printf(
       "| robot | nv | algorithm | ours ns | DART 6.12 ns | KDL ns | DART/ours | "
-      "KDL/ours |\n|---|---|---|---|---|---|---|---|\n");
+      "KDL/ours | max rel. diff DART / KDL |\n|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   double worst_dart = 0, worst_kdl = 0;
   for (const Case& c : cases) {

@@ -1,10 +1,18 @@
 #!/usr/bin/env bash
 # Regenerates every chart of docs/charts/ from scratch (issue 6): runs charts_data (CSV data and
 # printed fits: orders, slopes, scaling exponents) and plots it with Debian's python3-matplotlib.
-# Assumes the package is built (scripts/build.sh); CHARTS_BIN overrides where charts_data is.
+# Installs what is missing (with python3-matplotlib) and builds first; CHARTS_BIN overrides where
+# charts_data is (then nothing is built).
 # Usage: scripts/charts.sh [--quick]    (--quick: shorter runs, for a smoke test)
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
+if [[ -z "${CHARTS_BIN:-}" ]]; then
+  bash "$repo/scripts/deps.sh"
+  /usr/bin/python3 -c 'import matplotlib' 2>/dev/null ||
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+      python3-matplotlib >/dev/null
+  bash "$repo/scripts/build.sh"
+fi
 bin=${CHARTS_BIN:-$repo/.build/ws/devel/lib/se3_sim/charts_data}
 [[ -x "$bin" ]] || { echo "charts: $bin not found; build first (bash scripts/build.sh)"; exit 1; }
 /usr/bin/python3 -c 'import matplotlib' 2>/dev/null ||

@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Totals over the gtest and rostest result files of a catkin test run.
 
-catkin writes, per gtest binary, gtest-<name>.xml, and per rostest, rostest-<name>.xml (which
-already holds the cases of its test nodes; the test nodes' own rosunit-*.xml would count them a
-second time and are skipped). A binary that crashed or never wrote results leaves
-MISSING-*.xml, counted as one failure. Prints the failed cases, then one line
+catkin writes, per gtest binary, gtest-<name>.xml; per rostest, rostest-<name>.xml holds one
+case per test node (did it run and pass), and the test node's own cases are in
+rosunit-<test-name>.xml. Counted: the gtest cases, the test nodes' own cases, and a rostest
+wrapper case only when it failed (a node that died or never started leaves no inner cases). A
+binary that crashed or never wrote results leaves MISSING-*.xml, counted as one failure. Prints the failed cases, then one line
 'N passed, N failed' (', N skipped' when some were skipped); exits 1 on any failure or when no
 test ran.
 """
@@ -39,10 +40,14 @@ def main():
             failed += 1
             print('FAILED  %s (no results: the test crashed or did not run)' % base)
             continue
-        if not (base.startswith('gtest-') or base.startswith('rostest-')):
+        if not (base.startswith('gtest-') or base.startswith('rostest-')
+                or base.startswith('rosunit-')):
             continue
+        wrapper = base.startswith('rostest-')
         try:
             for name, status, msg in cases(f):
+                if wrapper and status != 'failed':
+                    continue
                 if status == 'passed':
                     passed += 1
                 elif status == 'skipped':
