@@ -143,7 +143,20 @@ struct Inertia {
 
   static Inertia from_com(double mass, const Vec3& com, const Mat3& I_com);
   /// Eq. (23) as a 6x6 matrix.
-  Mat6 matrix() const;
+  Mat6 matrix() const {
+    Mat6 J;
+    to_matrix(J);
+    return J;
+  }
+  /// Eq. (23) written into J (no temporary: hot paths fill preallocated matrices).
+  void to_matrix(Mat6& J) const {
+    J.topLeftCorner<3, 3>() = I;
+    J(0, 3) = 0, J(0, 4) = -h.z(), J(0, 5) = h.y();
+    J(1, 3) = h.z(), J(1, 4) = 0, J(1, 5) = -h.x();
+    J(2, 3) = -h.y(), J(2, 4) = h.x(), J(2, 5) = 0;
+    J.bottomLeftCorner<3, 3>() = -J.topRightCorner<3, 3>();
+    J.bottomRightCorner<3, 3>() = m * Mat3::Identity();
+  }
   /// J V (the momentum), without forming the matrix.
   Vec6 operator*(const Vec6& V) const {
     Vec6 r;

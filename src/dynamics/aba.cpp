@@ -29,14 +29,6 @@ inline void add_transformed_inertia(const SE3& X, const Mat6& Ia, Mat6& out) {
   out.bottomRightCorner<3, 3>() += C;
 }
 
-inline void set_inertia_matrix(const Inertia& I, Mat6& M) {
-  M.topLeftCorner<3, 3>() = I.I;
-  const Mat3 H = hat(I.h);
-  M.topRightCorner<3, 3>() = H;
-  M.bottomLeftCorner<3, 3>() = -H;
-  M.bottomRightCorner<3, 3>() = I.m * Mat3::Identity();
-}
-
 }  // namespace
 
 const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
@@ -45,7 +37,7 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
   // Outward: velocities (33), gamma (34), J_j and beta_j (39).
   if (model.floating) {
     data.V[0] = v.head<6>();
-    set_inertia_matrix(model.inertia[0], data.IA[0]);
+    model.inertia[0].to_matrix(data.IA[0]);
     // The base's generalized force tau[0:6] is a wrench on it, like f_ext_base.
     data.F[0] = cross_force(data.V[0], model.inertia[0] * data.V[0]) - tau.head<6>();
     if (f_ext_base) data.F[0] -= *f_ext_base;
@@ -63,7 +55,7 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     data.V[i] = Vi;
     data.c[i] = detail::cross_axis(t, Vi, qd);
     const Inertia& I = model.inertia[i];
-    set_inertia_matrix(I, data.IA[i]);
+    I.to_matrix(data.IA[i]);
     data.F[i] = cross_force(Vi, I * Vi);  // pA, eq. (39) (sign: bias force = -ad*_V J V)
   }
   // Inward: articulated inertias (38) and bias forces (40)-(41).

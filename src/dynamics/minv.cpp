@@ -15,24 +15,12 @@
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
-namespace {
-
-inline void inertia_matrix(const Inertia& I, Mat6& M) {
-  M.topLeftCorner<3, 3>() = I.I;
-  const Mat3 H = hat(I.h);
-  M.topRightCorner<3, 3>() = H;
-  M.bottomLeftCorner<3, 3>() = -H;
-  M.bottomRightCorner<3, 3>() = I.m * Mat3::Identity();
-}
-
-}  // namespace
-
 const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q) {
   const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
   forward_kinematics(model, data, base, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
-    inertia_matrix(model.inertia[i].transformed(data.oMb[i]), data.IA[i]);
+    model.inertia[i].transformed(data.oMb[i]).to_matrix(data.IA[i]);
   }
   auto& F = data.Fm;
   F.setZero();

@@ -229,15 +229,6 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
   return in;
 }
 
-Mat6 Inertia::matrix() const {
-  Mat6 J;
-  J.topLeftCorner<3, 3>() = I;
-  J.topRightCorner<3, 3>() = hat(h);
-  J.bottomLeftCorner<3, 3>() = -hat(h);
-  J.bottomRightCorner<3, 3>() = m * Mat3::Identity();
-  return J;
-}
-
 // Expressed in the frame where the body sits at f: x' = R x + p. With hat(a) hat(b) =
 // b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
 // (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
