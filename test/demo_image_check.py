@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""rostest for simulator + renderer together (test/demo.test).
+
+The camera is level (eye and target at the same height), so the horizon is the middle row and
+each sky row has one colour. Every link the simulator publishes on /tf whose origin projects
+into the sky (above the horizon, inside the image) must be drawn there: its pixel differs from
+that row's sky colour, read at the image's right edge. The image is read as raw bytes
+(rospy.AnyMsg), so no Python sensor_msgs package is needed.
+"""
+import math
+import struct
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from tf2_msgs.msg import TFMessage
+
+EYE = (3.0, -3.0, 1.2)
+TARGET = (0.0, 0.0, 1.2)
+FOCAL = 900.0
+W, H = 1280, 1024
+
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def unit(a):
+    n = math.sqrt(dot(a, a))
+    return tuple(x / n for x in a)
+
+
+FWD = unit(sub(TARGET, EYE))
+RIGHT = unit(cross(FWD, (0.0, 0.0, 1.0)))
+DOWN = cross(FWD, RIGHT)
+
+
+def project(p):
+    """Pixel of a world point, or None behind (or at) the eye."""
+    d = sub(p, EYE)
+    z = dot(d, FWD)
+    if z < 0.1:
+        return None
+    return W / 2 + FOCAL * dot(d, RIGHT) / z, H / 2 + FOCAL * dot(d, DOWN) / z
+
+
+def parse_image(buff):
+    off = 12
+    (n,) = struct.unpack_from("<I", buff, off)
+    off += 4 + n
+    height, width = struct.unpack_from("<II", buff, off)
+    off += 8
+    (n,) = struct.unpack_from("<I", buff, off)
+    encoding = buff[off + 4:off + 4 + n].decode()
+    off += 4 + n + 1
+    (step,) = struct.unpack_from("<I", buff, off)
+    off += 4
+    (n,) = struct.unpack_from("<I", buff, off)
+    return width, height, encoding, step, buff[off + 4:off + 4 + n]
+
+
+class DemoImageTest(unittest.TestCase):
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.image = None
+        self.links = {}
+        rospy.Subscriber("renderer/image", rospy.AnyMsg, self.on_image, queue_size=1)
+        rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10)
+
+    def on_image(self, msg):
+        with self.lock:
+            self.image = (time.time(), bytes(msg._buff), dict(self.links))
+
+    def on_tf(self, msg):
+        with self.lock:
+            for t in msg.transforms:
+                if t.header.frame_id == "world":
+                    tr = t.transform.translation
+                    self.links[t.child_frame_id] = (tr.x, tr.y, tr.z)
+
+    @staticmethod
+    def px(data, u, v):
+        i = 3 * (int(v) * W + int(u))
+        return data[i], data[i + 1], data[i + 2]
+
+    def test_links_drawn_where_the_simulator_puts_them(self):
+        end = time.time() + 40.0
+        checked = 0
+        while time.time() < end and checked == 0:
+            time.sleep(0.5)
+            with self.lock:
+                if self.image is None or len(self.image[2]) < 8:
+                    continue
+                stamp, buff, links = self.image
+            width, height, encoding, step, data = parse_image(buff)
+            self.assertEqual((width, height, encoding, step), (W, H, "rgb8", 3 * W))
+            self.assertEqual(len(data), 3 * W * H)
+            # The horizon lies on the middle row: sky above, darker ground below.
+            sky_near = self.px(data, W - 5, H / 2 - 4)
+            ground_near = self.px(data, W - 5, H / 2 + 4)
+            self.assertGreater(sum(sky_near), sum(ground_near) + 40)
+            for name, p in sorted(links.items()):
+                if name.startswith("renderer"):
+                    continue  # the renderer's own camera frame
+                uv = project(p)
+                if uv is None:
+                    continue
+                u, v = uv
+                if not (20 < u < W - 60 and 40 < v < H / 2 - 20):
+                    continue  # not in the sky part of the image
+                sky = self.px(data, W - 5, v)
+                got = self.px(data, u, v)
+                self.assertGreater(sum(abs(a - b) for a, b in zip(got, sky)), 30,
+                                   "link %s at pixel (%.0f, %.0f) looks like the sky" % (name, u, v))
+                checked += 1
+        self.assertGreater(checked, 2, "too few links projected into the sky")
+
+
+if __name__ == "__main__":
+    rospy.init_node("demo_image_check")
+    rostest.rosrun("se3_sim", "demo_image_check", DemoImageTest, sys.argv)
