@@ -7,8 +7,6 @@ into the sky (above the horizon, inside the image) must be drawn there: its pixe
 that row's sky colour, read at the image's right edge. The image is read as raw bytes
 (rospy.AnyMsg), so no Python sensor_msgs package is needed.
 """
-import math
-import struct
 import sys
 import threading
 import time
@@ -18,56 +16,9 @@ import rospy
 import rostest
 from tf2_msgs.msg import TFMessage
 
-EYE = (3.0, -3.0, 1.2)
-TARGET = (0.0, 0.0, 1.2)
-FOCAL = 900.0
-W, H = 1280, 1024
+from image_check_util import H, W, Camera, parse_image, px
 
-
-def sub(a, b):
-    return tuple(x - y for x, y in zip(a, b))
-
-
-def dot(a, b):
-    return sum(x * y for x, y in zip(a, b))
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def unit(a):
-    n = math.sqrt(dot(a, a))
-    return tuple(x / n for x in a)
-
-
-FWD = unit(sub(TARGET, EYE))
-RIGHT = unit(cross(FWD, (0.0, 0.0, 1.0)))
-DOWN = cross(FWD, RIGHT)
-
-
-def project(p):
-    """Pixel of a world point, or None behind (or at) the eye."""
-    d = sub(p, EYE)
-    z = dot(d, FWD)
-    if z < 0.1:
-        return None
-    return W / 2 + FOCAL * dot(d, RIGHT) / z, H / 2 + FOCAL * dot(d, DOWN) / z
-
-
-def parse_image(buff):
-    off = 12
-    (n,) = struct.unpack_from("<I", buff, off)
-    off += 4 + n
-    height, width = struct.unpack_from("<II", buff, off)
-    off += 8
-    (n,) = struct.unpack_from("<I", buff, off)
-    encoding = buff[off + 4:off + 4 + n].decode()
-    off += 4 + n + 1
-    (step,) = struct.unpack_from("<I", buff, off)
-    off += 4
-    (n,) = struct.unpack_from("<I", buff, off)
-    return width, height, encoding, step, buff[off + 4:off + 4 + n]
+CAMERA = Camera((3.0, -3.0, 1.2), (0.0, 0.0, 1.2), 900.0)  # as in demo.test
 
 
 class DemoImageTest(unittest.TestCase):
@@ -91,8 +42,7 @@ class DemoImageTest(unittest.TestCase):
 
     @staticmethod
     def px(data, u, v):
-        i = 3 * (int(v) * W + int(u))
-        return data[i], data[i + 1], data[i + 2]
+        return px(data, u, v)
 
     def test_links_drawn_where_the_simulator_puts_them(self):
         end = time.time() + 40.0
@@ -113,7 +63,7 @@ class DemoImageTest(unittest.TestCase):
             for name, p in sorted(links.items()):
                 if name.startswith("renderer"):
                     continue  # the renderer's own camera frame
-                uv = project(p)
+                uv = CAMERA.project(p)
                 if uv is None:
                     continue
                 u, v = uv

@@ -7,7 +7,6 @@ horizon lies on the row the camera geometry gives. The image is read as raw byte
 so no Python sensor_msgs package is needed.
 """
 import math
-import struct
 import sys
 import time
 import unittest
@@ -18,44 +17,13 @@ import rostest
 from geometry_msgs.msg import TransformStamped
 from tf2_msgs.msg import TFMessage
 
+from image_check_util import H, W, Camera, parse_image, px
+
 EYE = (2.0, -2.0, 0.8)
 TARGET = (0.0, 0.0, 0.5)
 FOCAL = 1000.0
-W, H = 1280, 1024
-
-
-def sub(a, b):
-    return tuple(x - y for x, y in zip(a, b))
-
-
-def dot(a, b):
-    return sum(x * y for x, y in zip(a, b))
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def unit(a):
-    n = math.sqrt(dot(a, a))
-    return tuple(x / n for x in a)
-
-
-FWD = unit(sub(TARGET, EYE))
-RIGHT = unit(cross(FWD, (0.0, 0.0, 1.0)))
-DOWN = cross(FWD, RIGHT)
-
-
-def project(p):
-    """Pixel (u, v) of a world point: the camera of renderer.test, built independently."""
-    d = sub(p, EYE)
-    z = dot(d, FWD)
-    return W / 2 + FOCAL * dot(d, RIGHT) / z, H / 2 + FOCAL * dot(d, DOWN) / z
-
-
-def horizon_row():
-    # Level rays through the centre column: (b DOWN + FWD) . e_z = 0.
-    return H / 2 + FOCAL * (-FWD[2] / DOWN[2])
+CAMERA = Camera(EYE, TARGET, FOCAL)  # the camera of renderer.test, built independently
+project = CAMERA.project
 
 
 def quaternion_rpy(r, p, y):
@@ -64,24 +32,6 @@ def quaternion_rpy(r, p, y):
     cy, sy = math.cos(y / 2), math.sin(y / 2)
     return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
             cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
-
-
-def parse_image(buff):
-    """sensor_msgs/Image from its serialized bytes."""
-    off = 12  # seq, stamp
-    (n,) = struct.unpack_from("<I", buff, off)
-    off += 4 + n
-    height, width = struct.unpack_from("<II", buff, off)
-    off += 8
-    (n,) = struct.unpack_from("<I", buff, off)
-    encoding = buff[off + 4:off + 4 + n].decode()
-    off += 4 + n
-    off += 1  # is_bigendian
-    (step,) = struct.unpack_from("<I", buff, off)
-    off += 4
-    (n,) = struct.unpack_from("<I", buff, off)
-    data = buff[off + 4:off + 4 + n]
-    return width, height, encoding, step, data
 
 
 class RendererImageTest(unittest.TestCase):
@@ -129,8 +79,7 @@ class RendererImageTest(unittest.TestCase):
 
     @staticmethod
     def px(data, u, v):
-        i = 3 * (int(v) * W + int(u))
-        return data[i], data[i + 1], data[i + 2]
+        return px(data, u, v)
 
     def test_image(self):
         width, height, encoding, step, before = self.wait_image(0.0)
@@ -155,7 +104,7 @@ class RendererImageTest(unittest.TestCase):
 
         # The horizon: bright sky just above the computed row, darker ground just below, at
         # columns away from the robot.
-        vh = horizon_row()
+        vh = CAMERA.horizon_row()
         self.assertTrue(10 < vh < H - 10)
         for u in (5, 100, W - 100, W - 5):
             sky = self.px(after, u, math.floor(vh) - 3)
