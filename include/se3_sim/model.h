@@ -87,6 +87,8 @@ struct Model {
   void validate() const;
   /// Fills children and subtree_end from parent; call after building a model by hand.
   void finalize();
+  /// Starts a model by hand: only the base body 0 (link `root`, the given inertia), no joints.
+  void start_with_base(const std::string& root, const Inertia& base_inertia = Inertia());
 };
 
 struct UrdfOptions {

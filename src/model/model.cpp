@@ -38,6 +38,23 @@ void Model::finalize() {
   }
 }
 
+void Model::start_with_base(const std::string& root, const Inertia& base_inertia) {
+  n = 0;
+  root_link = root;
+  parent = {-1};
+  X_tree = {SE3()};
+  joint_type = {JointType::Revolute};
+  inertia = {base_inertia};
+  body_name = {root};
+  joint_name = {""};
+  lower = {0};
+  upper = {0};
+  effort = {0};
+  velocity = {0};
+  damping = {0};
+  friction = {0};
+}
+
 void Model::validate() const {
   const size_t nb = static_cast<size_t>(n) + 1;
   if (parent.size() != nb || X_tree.size() != nb || joint_type.size() != nb ||
@@ -78,7 +95,6 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
   Model m;
   m.name = "chain" + std::to_string(n);
   m.floating = floating;
-  m.root_link = "base";
   const double w = 0.04;
   auto box_inertia = [&](double mass, double L) {
     Mat3 I = Mat3::Zero();
@@ -88,18 +104,7 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
   };
   auto mass_of = [&](int i) { return masses.empty() ? 1.0 : masses[i % masses.size()]; };
   const double inf = std::numeric_limits<double>::infinity();
-  m.parent = {-1};
-  m.X_tree = {SE3()};
-  m.joint_type = {JointType::Revolute};
-  m.inertia = {box_inertia(mass_of(0), length)};
-  m.body_name = {"base"};
-  m.joint_name = {""};
-  m.lower = {0};
-  m.upper = {0};
-  m.effort = {0};
-  m.velocity = {0};
-  m.damping = {0};
-  m.friction = {0};
+  m.start_with_base("base", box_inertia(mass_of(0), length));
   m.links.push_back({"base", 0, SE3()});
   Geometry g;
   g.type = GeometryType::Box;

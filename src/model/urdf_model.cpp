@@ -265,19 +265,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.root_link = root->name;
-  m.parent = {-1};
-  m.X_tree = {SE3()};
-  m.joint_type = {JointType::Revolute};
-  m.inertia = {Inertia()};
-  m.body_name = {root->name};
-  m.joint_name = {""};
-  m.lower = {0};
-  m.upper = {0};
-  m.effort = {0};
-  m.velocity = {0};
-  m.damping = {0};
-  m.friction = {0};
+  m.start_with_base(root->name);
   b.visit(*root, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "scene_reader.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -24,54 +25,7 @@ namespace {
 
 using yaml_lite::Node;
 
-class Rd {
- public:
-  explicit Rd(const std::string& file) : file_(file) {}
-  [[noreturn]] void fail(const Node& n, const std::string& what) const {
-    throw SceneError(file_ + ":" + std::to_string(n.line) + ": " + what);
-  }
-  double number(const Node& n, const std::string& key) const {
-    if (!n.is_scalar() || n.value.empty()) fail(n, "'" + key + "' needs a number");
-    char* end = nullptr;
-    const double x = std::strtod(n.value.c_str(), &end);
-    if (*end != '\0' || !std::isfinite(x)) {
-      fail(n, "'" + key + "' needs a finite number, got '" + n.value + "'");
-    }
-    return x;
-  }
-  std::string text(const Node& n, const std::string& key) const {
-    if (!n.is_scalar() || n.value.empty()) fail(n, "'" + key + "' needs a value");
-    return n.value;
-  }
-  bool boolean(const Node& n, const std::string& key) const {
-    const std::string v = text(n, key);
-    if (v == "true" || v == "True" || v == "yes" || v == "on") return true;
-    if (v == "false" || v == "False" || v == "no" || v == "off") return false;
-    fail(n, "'" + key + "' needs true or false, got '" + v + "'");
-  }
-  Vec3 vec3(const Node& n, const std::string& key) const {
-    if (!n.is_list() || n.list.size() != 3) fail(n, "'" + key + "' needs [x, y, z]");
-    return Vec3(number(n.list[0], key), number(n.list[1], key), number(n.list[2], key));
-  }
-  const Node& map(const Node& n, const std::string& key) const {
-    if (!n.is_map()) fail(n, "'" + key + "' needs a map {key: value, ...}");
-    return n;
-  }
-  void only(const Node& n, const std::string& where, const std::vector<std::string>& keys) const {
-    for (const auto& kv : n.map) {
-      bool known = false;
-      for (const auto& k : keys) known = known || k == kv.first;
-      if (!known) {
-        std::string list;
-        for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
-        fail(kv.second, "unknown key '" + kv.first + "' in " + where + " (known: " + list + ")");
-      }
-    }
-  }
-
- private:
-  std::string file_;
-};
+using Rd = SceneReader;
 
 Vec3 direction(const Rd& r, const Node& n, const std::string& key) {
   if (n.is_scalar()) {
@@ -88,8 +42,9 @@ Vec3 direction(const Rd& r, const Node& n, const std::string& key) {
 void parse_bilateral(const Rd& r, const std::string& name, const Node& v, ConstraintSpec& spec) {
   const std::string where = "constraints." + name;
   r.map(v, where);
-  r.only(v, where,
-         {"type", "link_a", "point_a", "link_b", "point_b", "axis_a", "axis_world", "directions"});
+  r.only_keys(
+      v, where,
+      {"type", "link_a", "point_a", "link_b", "point_b", "axis_a", "axis_world", "directions"});
   BilateralConstraint c;
   c.name = name;
   bool has_type = false, has_a = false;
@@ -171,7 +126,7 @@ void parse_constraint_key(const std::string& key, const Node& v, const std::stri
       return;
     }
     r.map(v, key);
-    r.only(v, key, {"normal", "offset", "mu", "from_collisions"});
+    r.only_keys(v, key, {"normal", "offset", "mu", "from_collisions"});
     spec.ground = true;
     for (const auto& kv : v.map) {
       const std::string k = key + "." + kv.first;
@@ -192,7 +147,7 @@ void parse_constraint_key(const std::string& key, const Node& v, const std::stri
     for (const auto& kv : v.map) {
       const std::string where = key + "." + kv.first;
       r.map(kv.second, where);
-      r.only(kv.second, where, {"link", "position", "radius"});
+      r.only_keys(kv.second, where, {"link", "position", "radius"});
       ContactPoint c;
       c.name = kv.first;
       for (const auto& p : kv.second.map) {
@@ -211,7 +166,7 @@ void parse_constraint_key(const std::string& key, const Node& v, const std::stri
     }
   } else if (key == "constraint_options") {
     r.map(v, key);
-    r.only(
+    r.only_keys(
         v, key,
         {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol", "projection_iterations",
          "singular_tol", "pgs_iterations", "pgs_tol", "erp", "slop", "margin", "bilateral_erp"});
