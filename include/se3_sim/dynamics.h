@@ -23,12 +23,16 @@ using Mat36 = Eigen::Matrix<double, 3, 6>;
 struct Data {
   explicit Data(const Model& model);
 
-  std::vector<SE3> Xup;  ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
-  std::vector<SE3> oMb;  ///< body i in the world
-  std::vector<Vec6> V;   ///< body twists (body frame), eq. (33)
-  std::vector<Vec6> A;   ///< body accelerations (body frame, gravity folded in), eq. (35)
-  std::vector<Vec6> c;   ///< velocity-product accelerations gamma, eq. (34)
-  std::vector<Vec6> F;   ///< body wrenches / bias forces, eq. (36)
+  std::vector<SE3> Xup;              ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
+  std::vector<double> sin_q, cos_q;  ///< sin and cos of every joint position (revolute joints)
+  std::vector<SE3> oMb;              ///< body i in the world
+  std::vector<Vec6> V;               ///< body twists (body frame), eq. (33)
+  std::vector<Vec6> A;  ///< body accelerations (body frame, gravity folded in), eq. (35)
+  std::vector<Vec6> c;  ///< velocity-product accelerations gamma, eq. (34)
+  std::vector<Vec6> F;  ///< body wrenches / bias forces, eq. (36)
+  /// rnea: twist and acceleration of body i interleaved component by component,
+  /// (V_0, A_0, V_1, A_1, ..., V_5, A_5) in VA[2i], VA[2i+1], so both travel through one transform.
+  std::vector<Vec6> VA;
   std::vector<Mat6> IA;  ///< articulated-body inertias, eq. (38)
   std::vector<Vec6> U;   ///< IA S
   std::vector<double> Dinv, u;

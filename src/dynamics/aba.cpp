@@ -4,6 +4,13 @@
 // Ad*(IA_k - U_k U_k^T / D_k) Ad^-1 (U = IA S, D = S^T IA S); (40)-(41) carry the bias force
 // pA_k + Ia_k gamma_k + U_k u_k / D_k to the parent, with u_k = tau_k - S^T pA_k; (42)-(43) run
 // outward. For the free base, S_0 = 1 (eq. 26) so (42) becomes a 6x6 solve with IA_0.
+//
+// Cost. The articulated inertias are symmetric: only their upper triangles are formed and
+// read (IA[i] below holds a valid upper triangle only). The projected inertia
+// Ia = IA - U U^T / D passed to the parent has a zero row and column at the joint axis
+// (Ia S = U - U D / D = 0), so for a revolute joint its blocks [A B; B^T C] have A's third
+// row and column and B's third row zero: the transform into the parent's frame works on the
+// 15 entries left.
 #include <Eigen/Cholesky>
 
 #include "joint.h"
@@ -12,21 +19,155 @@
 namespace se3 {
 namespace {
 
-// out += Ad*_{X^-1} Ia Ad_{X^-1}: an articulated inertia of a child (frame X in its parent)
-// expressed in the parent's frame. Blockwise with Ia = [A B; B^T C]: rotate every block, then
-// shift by p: A' - B' p^ + p^ B'^T - p^ C' p^, B' + p^ C', C'.
-inline void add_transformed_inertia(const SE3& X, const Mat6& Ia, Mat6& out) {
-  const Mat3& R = X.R;
-  const Mat3 A = R * Ia.topLeftCorner<3, 3>() * R.transpose();
-  const Mat3 B = R * Ia.topRightCorner<3, 3>() * R.transpose();
-  const Mat3 C = R * Ia.bottomRightCorner<3, 3>() * R.transpose();
-  const Mat3 P = hat(X.p);
-  const Mat3 PC = P * C;
-  const Mat3 BP = B * P;
-  out.topLeftCorner<3, 3>() += A - BP - BP.transpose() - PC * P;
-  out.topRightCorner<3, 3>() += B + PC;
-  out.bottomLeftCorner<3, 3>() += B.transpose() + PC.transpose();
-  out.bottomRightCorner<3, 3>() += C;
+// Upper-triangle entry (r, c), r <= c, of a column-major 6x6.
+inline double& up(Mat6& m, int r, int c) {
+  return m.data()[r + 6 * c];
+}
+inline double up(const Mat6& m, int r, int c) {
+  return m.data()[r + 6 * c];
+}
+
+// The inward step of a revolute body i (eqs. 38, 40, 41), on the upper triangle of its
+// articulated inertia IA: Ia = IA - U U^T / D, whose row and column 2 vanish, and
+// pa = pA + Ia c + U u / D; then adds Ad*_{f^-1} Ia Ad_{f^-1} to the parent's IA (upper
+// triangle) and returns pa (child frame). f = (R, p) is the child in its parent.
+//
+// Ia = [A B; B^T C] has A = [a00 a01 0; a01 a11 0; 0 0 0] and B's row 2 zero. The rotation:
+// A' = R A R^T = u r0^T + w r1^T (r_k the columns of R, u = a00 r0 + a01 r1,
+// w = a01 r0 + a11 r1), B' = R B R^T = r0 (R b0)^T + r1 (R b1)^T (b_k the rows of B),
+// C' = R C R^T. The shift by P = hat(p): A'' = A' + M + M^T - N P, B'' = B' + N, C'' = C',
+// N = P C', M = P B'^T (N P is symmetric).
+inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
+                            const Vec6& pA, const Vec6& c, Mat6& IAp) {
+  const double* m = IA.data();  // m[r + 6 c], r <= c
+  double Ud[6];
+#pragma GCC unroll 6
+  for (int r = 0; r < 6; ++r) Ud[r] = U[r] * Dinv;
+  const double a00 = m[0] - Ud[0] * U[0], a01 = m[6] - Ud[0] * U[1], a11 = m[7] - Ud[1] * U[1];
+  double B[2][3], C[3][3];
+#pragma GCC unroll 3
+  for (int j = 0; j < 3; ++j) {
+    B[0][j] = m[0 + 6 * (3 + j)] - Ud[0] * U[3 + j];
+    B[1][j] = m[1 + 6 * (3 + j)] - Ud[1] * U[3 + j];
+  }
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+#pragma GCC unroll 3
+    for (int j = i; j < 3; ++j) C[i][j] = C[j][i] = m[3 + i + 6 * (3 + j)] - Ud[3 + i] * U[3 + j];
+  }
+  // (40)-(41): pa = pA + U u / D + Ia c, with c = (c0, c1, 0, c3, c4, 0).
+  Vec6 pa;
+  pa[0] = pA[0] + Ud[0] * u + a00 * c[0] + a01 * c[1] + B[0][0] * c[3] + B[0][1] * c[4];
+  pa[1] = pA[1] + Ud[1] * u + a01 * c[0] + a11 * c[1] + B[1][0] * c[3] + B[1][1] * c[4];
+  pa[2] = pA[2] + Ud[2] * u;
+#pragma GCC unroll 3
+  for (int j = 0; j < 3; ++j) {
+    pa[3 + j] = pA[3 + j] + Ud[3 + j] * u + B[0][j] * c[0] + B[1][j] * c[1] + C[j][0] * c[3] +
+                C[j][1] * c[4];
+  }
+  // (38): the rotation.
+  const double* R = f.R.data();  // column-major: R(r, k) = R[r + 3 k]
+  double Ap[3][3], Bp[3][3], Cp[3][3], Z[3][3], y0[3], y1[3], uu[3], ww[3];
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    const double R0 = R[r], R1 = R[r + 3], R2 = R[r + 6];
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) Z[r][j] = R0 * C[0][j] + R1 * C[1][j] + R2 * C[2][j];
+    y0[r] = R0 * B[0][0] + R1 * B[0][1] + R2 * B[0][2];
+    y1[r] = R0 * B[1][0] + R1 * B[1][1] + R2 * B[1][2];
+    uu[r] = a00 * R0 + a01 * R1;
+    ww[r] = a01 * R0 + a11 * R1;
+  }
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {
+      Bp[i][j] = R[i] * y0[j] + R[i + 3] * y1[j];
+      if (j >= i) {
+        Cp[i][j] = Cp[j][i] = Z[i][0] * R[j] + Z[i][1] * R[j + 3] + Z[i][2] * R[j + 6];
+        Ap[i][j] = uu[i] * R[j] + ww[i] * R[j + 3];
+      }
+    }
+  }
+  // The shift.
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  double N[3][3], M[3][3];
+#pragma GCC unroll 3
+  for (int j = 0; j < 3; ++j) {  // N(:, j) = p x C'(:, j); M(:, j) = p x B'(j, :)
+    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
+    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
+    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
+    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
+    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
+    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
+  }
+  double* o = IAp.data();
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
+                         px * N[i][1] - py * N[i][0]};  // -(N P)(i, :)
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {
+      if (j >= i) {
+        o[i + 6 * j] += Ap[i][j] + M[i][j] + M[j][i] + q[j];
+        o[3 + i + 6 * (3 + j)] += Cp[i][j];
+      }
+      o[i + 6 * (3 + j)] += Bp[i][j] + N[i][j];
+    }
+  }
+  return pa;
+}
+
+// The same step for a prismatic body (eq. 38 on the full symmetric Ia; its row and column 5
+// vanish): out += Ad*_{f^-1} Ia Ad_{f^-1}, Ia given as a full symmetric array.
+inline void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6& out) {
+  const double* R = f.R.data();
+  auto Rm = [R](int r, int c) { return R[r + 3 * c]; };
+  double Ap[3][3], Bp[3][3], Cp[3][3];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      double a = 0, b = 0, cc = 0;
+      for (int k = 0; k < 3; ++k) {
+        for (int l = 0; l < 3; ++l) {
+          const double rr = Rm(i, k) * Rm(j, l);
+          a += rr * ia[k][l];
+          b += rr * ia[k][3 + l];
+          cc += rr * ia[3 + k][3 + l];
+        }
+      }
+      Ap[i][j] = a, Bp[i][j] = b, Cp[i][j] = cc;
+    }
+  }
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  double N[3][3], M[3][3];
+  for (int j = 0; j < 3; ++j) {
+    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
+    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
+    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
+    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
+    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
+    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
+                         px * N[i][1] - py * N[i][0]};
+    for (int j = i; j < 3; ++j) up(out, i, j) += Ap[i][j] + M[i][j] + M[j][i] + q[j];
+    for (int j = 0; j < 3; ++j) up(out, i, 3 + j) += Bp[i][j] + N[i][j];
+    for (int j = i; j < 3; ++j) up(out, 3 + i, 3 + j) += Cp[i][j];
+  }
+}
+
+// J as a 6x6 (eq. 23), upper triangle: [I h^; -h^ m 1].
+inline void set_inertia_upper(const Inertia& J, Mat6& out) {
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r <= c; ++r) up(out, r, c) = J.I(r, c);
+  }
+  up(out, 0, 3) = 0, up(out, 0, 4) = -J.h.z(), up(out, 0, 5) = J.h.y();
+  up(out, 1, 3) = J.h.z(), up(out, 1, 4) = 0, up(out, 1, 5) = -J.h.x();
+  up(out, 2, 3) = -J.h.y(), up(out, 2, 4) = J.h.x(), up(out, 2, 5) = 0;
+  up(out, 3, 3) = J.m, up(out, 3, 4) = 0, up(out, 3, 5) = 0;
+  up(out, 4, 4) = J.m, up(out, 4, 5) = 0;
+  up(out, 5, 5) = J.m;
 }
 
 }  // namespace
@@ -34,10 +175,11 @@ inline void add_transformed_inertia(const SE3& X, const Mat6& Ia, Mat6& out) {
 const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
                 const VecX& tau, const Vec6* f_ext_base) {
   const int off = model.floating ? 6 : 0;
+  detail::joint_transforms(model, data, q);
   // Outward: velocities (33), gamma (34), J_j and beta_j (39).
   if (model.floating) {
     data.V[0] = v.head<6>();
-    model.inertia[0].to_matrix(data.IA[0]);
+    set_inertia_upper(model.inertia[0], data.IA[0]);
     // The base's generalized force tau[0:6] is a wrench on it, like f_ext_base.
     data.F[0] = cross_force(data.V[0], model.inertia[0] * data.V[0]) - tau.head<6>();
     if (f_ext_base) data.F[0] -= *f_ext_base;
@@ -45,52 +187,76 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     data.V[0].setZero();
   }
   for (int i = 1; i <= model.n; ++i) {
-    const int p = model.parent[i];
-    const JointType t = model.joint_type[i];
     const double qd = v[off + i - 1];
-    SE3& X = data.Xup[i];
-    detail::joint_transform(model.X_tree[i], t, q[i - 1], X);
-    Vec6 Vi = act_inv_motion(X, data.V[p]);
-    Vi[detail::axis_index(t)] += qd;
-    data.V[i] = Vi;
-    data.c[i] = detail::cross_axis(t, Vi, qd);
+    double* V = data.V[i].data();
+    detail::inv_motion(data.Xup[i], data.V[model.parent[i]].data(), V);
+    double* c = data.c[i].data();
+    if (model.joint_type[i] == JointType::Revolute) {
+      V[2] += qd;
+      c[0] = qd * V[1], c[1] = -qd * V[0], c[2] = 0, c[3] = qd * V[4], c[4] = -qd * V[3], c[5] = 0;
+    } else {
+      V[5] += qd;
+      c[0] = c[1] = c[2] = 0, c[3] = qd * V[1], c[4] = -qd * V[0], c[5] = 0;
+    }
     const Inertia& I = model.inertia[i];
-    I.to_matrix(data.IA[i]);
-    data.F[i] = cross_force(Vi, I * Vi);  // pA, eq. (39) (sign: bias force = -ad*_V J V)
+    set_inertia_upper(I, data.IA[i]);
+    detail::bias_force(I, V, data.F[i].data());  // pA, eq. (39): -ad*_V J V
   }
   // Inward: articulated inertias (38) and bias forces (40)-(41).
   for (int i = model.n; i >= 1; --i) {
     const int k = detail::axis_index(model.joint_type[i]);
     const Mat6& IA = data.IA[i];
-    data.U[i] = IA.col(k);
-    const double Dinv = 1.0 / data.U[i][k];
+    Vec6& U = data.U[i];
+    for (int r = 0; r < 6; ++r) U[r] = r <= k ? up(IA, r, k) : up(IA, k, r);  // IA S
+    const double Dinv = 1.0 / U[k];
     data.Dinv[i] = Dinv;
-    data.u[i] = tau[off + i - 1] - data.F[i][k];
+    const double u = tau[off + i - 1] - data.F[i][k];
+    data.u[i] = u;
     const int p = model.parent[i];
     if (p == 0 && !model.floating) continue;
-    const Vec6& U = data.U[i];
-    Mat6 Ia = IA;
-    Ia.noalias() -= (U * Dinv) * U.transpose();
-    const Vec6 pa = data.F[i] + Ia * data.c[i] + U * (data.u[i] * Dinv);
-    add_transformed_inertia(data.Xup[i], Ia, data.IA[p]);
-    data.F[p] += act_force(data.Xup[i], pa);
+    Vec6 pa;
+    if (k == 2) {
+      pa = inward_revolute(data.Xup[i], IA, U, Dinv, u, data.F[i], data.c[i], data.IA[p]);
+    } else {
+      // Ia = IA - U U^T / D (symmetric, zero row and column k), pa = pA + Ia c + U u / D.
+      double ia[6][6];
+      const Vec6 Ud = U * Dinv;
+      for (int c = 0; c < 6; ++c) {
+        for (int r = 0; r <= c; ++r) ia[r][c] = ia[c][r] = up(IA, r, c) - Ud[r] * U[c];
+      }
+      for (int r = 0; r < 6; ++r) ia[r][k] = ia[k][r] = 0;
+      const Vec6& c = data.c[i];
+      pa = data.F[i] + Ud * u;
+      for (int r = 0; r < 6; ++r) {
+        pa[r] += ia[r][0] * c[0] + ia[r][1] * c[1] + ia[r][3] * c[3] + ia[r][4] * c[4];
+      }
+      add_transformed_inertia(data.Xup[i], ia, data.IA[p]);
+    }
+    detail::add_force(data.Xup[i], pa.data(), data.F[p].data());
   }
   // Outward: accelerations (42)-(43), with gravity as the fictitious base acceleration.
   Vec6 ag;
   ag << 0, 0, 0, -(base.R.transpose() * model.gravity);
   if (model.floating) {
     // IA_0 a_0 = -pA_0 in the gravity-free frame; the true dV0/dt adds g back.
-    data.A[0] = -(data.IA[0].llt().solve(data.F[0]));
+    data.A[0] = -(data.IA[0].selfadjointView<Eigen::Upper>().llt().solve(data.F[0]));
     data.ddq.head<6>() = data.A[0] - ag;
   } else {
     data.A[0] = ag;
   }
   for (int i = 1; i <= model.n; ++i) {
     const int k = detail::axis_index(model.joint_type[i]);
-    Vec6 a = act_inv_motion(data.Xup[i], data.A[model.parent[i]]) + data.c[i];
-    const double qdd = (data.u[i] - data.U[i].dot(a)) * data.Dinv[i];
+    double* a = data.A[i].data();
+    detail::inv_motion(data.Xup[i], data.A[model.parent[i]].data(), a);
+    const double* c = data.c[i].data();
+    const double* U = data.U[i].data();
+    double Ua = 0;
+    for (int r = 0; r < 6; ++r) {
+      a[r] += c[r];
+      Ua += U[r] * a[r];
+    }
+    const double qdd = (data.u[i] - Ua) * data.Dinv[i];
     a[k] += qdd;
-    data.A[i] = a;
     data.ddq[off + i - 1] = qdd;
   }
   return data.ddq;

@@ -6,61 +6,95 @@
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
-namespace detail {
 
-/// World-frame joint axis of body i (S_i carried by oMb[i]).
-inline Vec6 world_axis(JointType t, const SE3& oMi) {
-  Vec6 s;
-  const Vec3 z = oMi.R.col(2);
-  if (t == JointType::Revolute) {
-    s << z, oMi.p.cross(z);
-  } else {
-    s << 0, 0, 0, z;
-  }
-  return s;
-}
-
-}  // namespace detail
+using detail::load2;
+using detail::store2;
+using detail::v2d;
 
 const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q) {
   const int off = model.floating ? 6 : 0;
+  const int nv = model.nv;
   forward_kinematics(model, data, base, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
     data.Ic[i] = model.inertia[i].transformed(data.oMb[i]);
   }
+  // World-frame joint axes S_i (revolute: [z; p x z], prismatic: [0; z]), one row of Jrow per
+  // twist component so that a row of D is six axpys.
+  double* J[6];
+  for (int r = 0; r < 6; ++r) J[r] = data.Jrow.row(r).data();
   for (int i = 1; i <= model.n; ++i) {
-    data.S[i] = detail::world_axis(model.joint_type[i], data.oMb[i]);
-    data.Jrow.col(off + i - 1) = data.S[i];
+    const double* R = data.oMb[i].R.data();
+    const double* p = data.oMb[i].p.data();
+    const double zx = R[6], zy = R[7], zz = R[8];
+    const int col = off + i - 1;
+    if (model.joint_type[i] == JointType::Revolute) {
+      J[0][col] = zx, J[1][col] = zy, J[2][col] = zz;
+      J[3][col] = p[1] * zz - p[2] * zy;
+      J[4][col] = p[2] * zx - p[0] * zz;
+      J[5][col] = p[0] * zy - p[1] * zx;
+    } else {
+      J[0][col] = J[1][col] = J[2][col] = 0;
+      J[3][col] = zx, J[4][col] = zy, J[5][col] = zz;
+    }
   }
+  double* M = data.M.data();  // column-major, leading dimension nv
   for (int i = model.n; i >= 1; --i) {
     const int p = model.parent[i];
-    if (p > 0 || model.floating) data.Ic[p] += data.Ic[i];
-    const Vec6 F = data.Ic[i] * data.S[i];
+    Inertia& Ic = data.Ic[i];
+    if (p > 0 || model.floating) {
+      Inertia& Ip = data.Ic[p];
+      Ip.m += Ic.m;
+      for (int r = 0; r < 3; ++r) Ip.h[r] += Ic.h[r];
+      for (int r = 0; r < 9; ++r) Ip.I.data()[r] += Ic.I.data()[r];
+    }
+    // F = Ic S_i: (I w + h x v, m v - h x w) for S_i = (w, v).
     const int col = off + i - 1;
-    // Column i of D above the diagonal (contiguous in column-major storage); ancestors come
-    // in runs of consecutive indices (a chain is a single run).
+    const double w0 = J[0][col], w1 = J[1][col], w2 = J[2][col];
+    const double v0 = J[3][col], v1 = J[4][col], v2 = J[5][col];
+    const double* I = Ic.I.data();
+    const double hx = Ic.h[0], hy = Ic.h[1], hz = Ic.h[2], m = Ic.m;
+    const double F0 = I[0] * w0 + I[3] * w1 + I[6] * w2 + (hy * v2 - hz * v1);
+    const double F1 = I[1] * w0 + I[4] * w1 + I[7] * w2 + (hz * v0 - hx * v2);
+    const double F2 = I[2] * w0 + I[5] * w1 + I[8] * w2 + (hx * v1 - hy * v0);
+    const double F3 = m * v0 - (hy * w2 - hz * w1);
+    const double F4 = m * v1 - (hz * w0 - hx * w2);
+    const double F5 = m * v2 - (hx * w1 - hy * w0);
+    // D(j, i) = S_j . F for every ancestor j of i (and j = i), written to both triangles.
+    // Ancestors come in runs of consecutive indices (a chain is a single run); column i above
+    // the diagonal is contiguous in column-major storage.
+    double* mcol = M + static_cast<std::ptrdiff_t>(col) * nv;
     int j = i;
     while (j > 0) {
       const int s = data.run_start[j];
-      const int c0 = off + s - 1, len = j - s + 1;
-      double* m = data.M.col(col).data();
-      const double *j0 = data.Jrow.row(0).data(), *j1 = data.Jrow.row(1).data(),
-                   *j2 = data.Jrow.row(2).data(), *j3 = data.Jrow.row(3).data(),
-                   *j4 = data.Jrow.row(4).data(), *j5 = data.Jrow.row(5).data();
-#pragma GCC ivdep
-      for (int c = c0; c < c0 + len; ++c) {
-        m[c] =
-            F[0] * j0[c] + F[1] * j1[c] + F[2] * j2[c] + F[3] * j3[c] + F[4] * j4[c] + F[5] * j5[c];
+      const int c0 = off + s - 1, c1 = off + j;
+      int c = c0;
+      for (; c + 2 <= c1; c += 2) {  // two entries per step, one SSE2 register
+        const v2d x = F0 * load2(J[0] + c) + F1 * load2(J[1] + c) + F2 * load2(J[2] + c) +
+                      F3 * load2(J[3] + c) + F4 * load2(J[4] + c) + F5 * load2(J[5] + c);
+        store2(mcol + c, x);
+        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x[0];
+        M[col + static_cast<std::ptrdiff_t>(c + 1) * nv] = x[1];
+      }
+      if (c < c1) {
+        const double x =
+            F0 * J[0][c] + F1 * J[1][c] + F2 * J[2][c] + F3 * J[3][c] + F4 * J[4][c] + F5 * J[5][c];
+        mcol[c] = x;
+        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x;
       }
       j = model.parent[s];
     }
-    if (model.floating) data.M.col(col).head<6>() = act_inv_force(data.oMb[0], F);
+    if (model.floating) {  // the base rows: S_0 = 1 in the base frame, Ad*_{f0}^-1 F
+      const Vec6 Fb = act_inv_force(data.oMb[0], (Vec6() << F0, F1, F2, F3, F4, F5).finished());
+      for (int r = 0; r < 6; ++r) {
+        mcol[r] = Fb[r];
+        M[col + static_cast<std::ptrdiff_t>(r) * nv] = Fb[r];
+      }
+    }
   }
   if (model.floating) {
     // The whole system's composite inertia in the base frame.
     data.M.topLeftCorner<6, 6>() = data.Ic[0].transformed(data.oMb[0].inverse()).matrix();
   }
-  data.M.triangularView<Eigen::StrictlyLower>() = data.M.transpose();
   return data.M;
 }
 

@@ -5,6 +5,9 @@ namespace se3 {
 Data::Data(const Model& model) {
   const size_t nb = static_cast<size_t>(model.n) + 1;
   Xup.assign(nb, SE3());
+  sin_q.assign(nb, 0.0);
+  cos_q.assign(nb, 1.0);
+  VA.assign(2 * nb, Vec6::Zero());
   oMb.assign(nb, SE3());
   V.assign(nb, Vec6::Zero());
   A.assign(nb, Vec6::Zero());

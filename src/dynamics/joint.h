@@ -4,29 +4,123 @@
 #pragma once
 
 #include <cmath>
+#include <cstring>
 
-#include "se3_sim/model.h"
+#include "se3_sim/dynamics.h"
 
 namespace se3 {
 namespace detail {
+
+/// Two doubles in one SSE2 register (GCC/Clang vector extension: plain SSE2, no -march needed).
+typedef double v2d __attribute__((vector_size(16)));
+
+inline v2d load2(const double* p) {
+  v2d r;
+  std::memcpy(&r, p, sizeof r);
+  return r;
+}
+inline void store2(double* p, v2d x) {
+  std::memcpy(p, &x, sizeof x);
+}
 
 /// Index of the non-zero entry of S in a 6-vector: 2 (revolute) or 5 (prismatic).
 inline int axis_index(JointType t) {
   return t == JointType::Revolute ? 2 : 5;
 }
 
+/// X_tree * exp(S q) of a revolute joint, given c = cos q and s = sin q: the parent-from-body
+/// displacement f_{i,j} = KK_j exp(S_j q_j) (eq. 26). Rz(q) turns the first two columns.
+inline void revolute_transform(const SE3& Xt, double c, double s, SE3& out) {
+  const double* a = Xt.R.data();  // column-major
+  double* r = out.R.data();
+  for (int k = 0; k < 3; ++k) {
+    r[k] = c * a[k] + s * a[3 + k];
+    r[3 + k] = c * a[3 + k] - s * a[k];
+    r[6 + k] = a[6 + k];
+  }
+  out.p = Xt.p;
+}
+
+/// X_tree * exp(S q) of a prismatic joint: a shift along the joint axis.
+inline void prismatic_transform(const SE3& Xt, double q, SE3& out) {
+  out.R = Xt.R;
+  out.p = Xt.p + q * Xt.R.col(2);
+}
+
 /// X_tree * exp(S q): the parent-from-body displacement f_{i,j} = KK_j exp(S_j q_j).
 inline void joint_transform(const SE3& Xt, JointType t, double q, SE3& out) {
   if (t == JointType::Revolute) {
-    const double c = std::cos(q), s = std::sin(q);
-    out.R.col(0) = c * Xt.R.col(0) + s * Xt.R.col(1);
-    out.R.col(1) = c * Xt.R.col(1) - s * Xt.R.col(0);
-    out.R.col(2) = Xt.R.col(2);
-    out.p = Xt.p;
+    revolute_transform(Xt, std::cos(q), std::sin(q), out);
   } else {
-    out.R = Xt.R;
-    out.p = Xt.p + q * Xt.R.col(2);
+    prismatic_transform(Xt, q, out);
   }
+}
+
+/// out = a * b for poses (out must be neither): rotation R_a R_b, position R_a p_b + p_a.
+inline void compose(const SE3& a, const SE3& b, SE3& out) {
+  const double* A = a.R.data();
+  const double* B = b.R.data();
+  double* O = out.R.data();
+  for (int c = 0; c < 3; ++c) {
+    const double b0 = B[3 * c], b1 = B[3 * c + 1], b2 = B[3 * c + 2];
+    for (int r = 0; r < 3; ++r) O[3 * c + r] = A[r] * b0 + A[r + 3] * b1 + A[r + 6] * b2;
+  }
+  const double p0 = b.p[0], p1 = b.p[1], p2 = b.p[2];
+  for (int r = 0; r < 3; ++r) out.p[r] = A[r] * p0 + A[r + 3] * p1 + A[r + 6] * p2 + a.p[r];
+}
+
+/// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
+/// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
+void joint_transforms(const Model& model, Data& data, const VecX& q);
+
+/// out = Ad_{f^-1} in for a twist (eq. 33's transform): (R^T w, R^T (v - p x w)). out != in.
+inline void inv_motion(const SE3& f, const double* in, double* out) {
+  const double* R = f.R.data();  // column-major
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  const double w0 = in[0], w1 = in[1], w2 = in[2];
+  const double t0 = in[3] - (py * w2 - pz * w1);
+  const double t1 = in[4] - (pz * w0 - px * w2);
+  const double t2 = in[5] - (px * w1 - py * w0);
+  for (int j = 0; j < 3; ++j) {
+    const double r0 = R[3 * j], r1 = R[3 * j + 1], r2 = R[3 * j + 2];
+    out[j] = r0 * w0 + r1 * w1 + r2 * w2;
+    out[3 + j] = r0 * t0 + r1 * t1 + r2 * t2;
+  }
+}
+
+/// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f).
+inline void add_force(const SE3& f, const double* in, double* out) {
+  const double* R = f.R.data();
+  double g[3];
+  for (int r = 0; r < 3; ++r) {
+    g[r] = R[r] * in[3] + R[r + 3] * in[4] + R[r + 6] * in[5];
+    out[r] += R[r] * in[0] + R[r + 3] * in[1] + R[r + 6] * in[2];
+  }
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  out[0] += py * g[2] - pz * g[1];
+  out[1] += pz * g[0] - px * g[2];
+  out[2] += px * g[1] - py * g[0];
+  out[3] += g[0], out[4] += g[1], out[5] += g[2];
+}
+
+/// out = -ad*_V (J V) = V x* (J V), the velocity-product (bias) wrench of eqs. (24), (39), with
+/// J V = (I w + h x v, m v - h x w) (eq. 23).
+inline void bias_force(const Inertia& J, const double* V, double* out) {
+  const double w0 = V[0], w1 = V[1], w2 = V[2], v0 = V[3], v1 = V[4], v2 = V[5];
+  const double hx = J.h[0], hy = J.h[1], hz = J.h[2], m = J.m;
+  const double* I = J.I.data();
+  const double n0 = I[0] * w0 + I[3] * w1 + I[6] * w2 + (hy * v2 - hz * v1);
+  const double n1 = I[1] * w0 + I[4] * w1 + I[7] * w2 + (hz * v0 - hx * v2);
+  const double n2 = I[2] * w0 + I[5] * w1 + I[8] * w2 + (hx * v1 - hy * v0);
+  const double f0 = m * v0 - (hy * w2 - hz * w1);
+  const double f1 = m * v1 - (hz * w0 - hx * w2);
+  const double f2 = m * v2 - (hx * w1 - hy * w0);
+  out[0] = (w1 * n2 - w2 * n1) + (v1 * f2 - v2 * f1);
+  out[1] = (w2 * n0 - w0 * n2) + (v2 * f0 - v0 * f2);
+  out[2] = (w0 * n1 - w1 * n0) + (v0 * f1 - v1 * f0);
+  out[3] = w1 * f2 - w2 * f1;
+  out[4] = w2 * f0 - w0 * f2;
+  out[5] = w0 * f1 - w1 * f0;
 }
 
 /// V x (S qd), eq. (34) gamma = -ad_{S w}(V) = ad_V(S w).

@@ -3,12 +3,31 @@
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
+namespace detail {
+
+void joint_transforms(const Model& model, Data& data, const VecX& q) {
+  const int n = model.n;
+  double* s = data.sin_q.data() + 1;
+  double* c = data.cos_q.data() + 1;
+  for (int i = 0; i < n; ++i) {
+    ::sincos(q[i], &s[i], &c[i]);
+  }
+  for (int i = 1; i <= n; ++i) {
+    if (model.joint_type[i] == JointType::Revolute) {
+      revolute_transform(model.X_tree[i], data.cos_q[i], data.sin_q[i], data.Xup[i]);
+    } else {
+      prismatic_transform(model.X_tree[i], q[i - 1], data.Xup[i]);
+    }
+  }
+}
+
+}  // namespace detail
 
 void forward_kinematics(const Model& model, Data& data, const SE3& base, const VecX& q) {
+  detail::joint_transforms(model, data, q);
   data.oMb[0] = base;
   for (int i = 1; i <= model.n; ++i) {
-    detail::joint_transform(model.X_tree[i], model.joint_type[i], q[i - 1], data.Xup[i]);
-    data.oMb[i] = data.oMb[model.parent[i]] * data.Xup[i];
+    detail::compose(data.oMb[model.parent[i]], data.Xup[i], data.oMb[i]);
   }
 }
 

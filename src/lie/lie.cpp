@@ -233,26 +233,6 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
 // b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
 // (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
 // symmetric result needs only its upper triangle. A hot path of crba, minv and aba.
-Inertia Inertia::transformed(const SE3& f) const {
-  Inertia out;
-  out.m = m;
-  const Vec3 Rh = f.R * h;
-  const Vec3& p = f.p;
-  out.h = Rh + m * p;
-  const Mat3 RI = f.R * I;
-  const double d = 2.0 * p.dot(Rh) + m * p.squaredNorm();
-  const Vec3 w = Rh + 0.5 * m * p;  // Rh p^T + p Rh^T + m p p^T = w p^T + p w^T
-  for (int r = 0; r < 3; ++r) {
-    for (int c = r; c < 3; ++c) {
-      const double x = RI.row(r).dot(f.R.row(c)) - (w[r] * p[c] + p[r] * w[c]);
-      out.I(r, c) = x;
-      out.I(c, r) = x;
-    }
-    out.I(r, r) += d;
-  }
-  return out;
-}
-
 Mat6 spatial_inertia(double m, const Vec3& r, const Mat3& I_G) {
   return Inertia::from_com(m, r, I_G).matrix();
 }
