@@ -1,0 +1,210 @@
+// Batched sin/cos: two lanes per SSE2 register (GCC/Clang vector extensions, no FMA), without
+// branches except one "both lanes in range" test per pair.
+//
+// Method, for a lane with |x| <= B = 2^20. The kernel works on |x| (so k >= 0) and gives sin
+// the sign of x at the end (sin is odd, cos even).
+//
+// 1. k = nearest integer to |x| 2/pi (add and subtract 1.5 2^52), |x| = k pi/2 + r,
+//    |r| <= pi/4 + 2^-31, k <= 667544 < 2^20.
+// 2. r as a double-double rh + rl, with pi/2 = P1 + P2 + P3 + P4: P1 holds the bits 2^0..2^-32
+//    of pi/2, P2 the bits 2^-33..2^-53, P3 the bits 2^-54..2^-85, P4 the rest rounded to a
+//    double. k P1, k P2 and k P3 are exact (33, 20 and 32 bits times a 20-bit k).
+//    s = (|x| - k P1) - k P2 is exact: for k >= 1, |x| > 1/2 is a multiple of 2^-53, so are
+//    both products, and |s| < 1. (rh, e) = Fast2Sum(s, -k P3) is exact: if |s| >= |k P3| by
+//    the usual condition, else |s - k P3| < 2^-32 is a multiple of 2^-85, so s - k P3 is
+//    exact and e = 0. rl = e - k P4. |rh + rl - r| < 2^-118 (rounding of k P4 and the
+//    2^-141.8 tail of pi/2, times k < 2^20). Over the doubles next to k pi/2 for every
+//    k < 2^20 the smallest |r| is 2^-60.5 (x = 45.553093477052, k = 29), and in every binade
+//    of k it is large enough that r is known to 2^-66 relative or better.
+// 3. Split rh = A + (rh - A), A with 26 bits (Veltkamp), B = (rh - A) + rl: |B| <= 2^-26 |A|
+//    and z = A^2 is exact. With S = sin A, C = cos A (|B|^3 terms are below 2^-78 |A|):
+//      sin r = S + B (C - B/2 S),  cos r = C - B (S + B/2 C).
+// 4. Kernels on |A| <= pi/4 with my own weighted minimax fits in z (rounded to doubles one
+//    coefficient at a time, refitting the rest; relative error 2^-57.9 for sin, 2^-63.9 cos).
+//    tools/sincos/derive_constants.py derives them, the pi/2 parts and the |r| scan of 2.
+//      S = A + A z P(z),  C = 1 - z/2 + z^2 Q(z),  P, Q of degree 5.
+//    cos: w = fl(1 - z/2) plus its exact rounding error (1 - w) - z/2; z being exact, nothing
+//    of the size of an ulp of r^2 is lost (with z = fl(r^2) that alone costs up to 0.25 ulp).
+//    sin: the final A + tail goes through Fast2Sum, so the tail's own rounding does not count.
+//    Error budget at |r| = pi/4 (the worst place), in ulps of the result: sin 0.5 (final
+//    rounding) + 0.0625 (rounding of A z P) + 0.063 (of P) + 0.04 (of A z) + 0.024 (fit)
+//    < 0.70; cos 0.5 + 0.05 = 0.55. B terms, reduction and the dropped B^3 terms: < 0.001.
+// 5. Quadrant k mod 4 (the low bits of 1.5 2^52 + k): swap sin/cos for odd k and flip signs,
+//    with bit masks.
+//
+// Measured against long double sinl/cosl (test/gtest_sincos.cpp): max error 0.67 ulp.
+#include "sincos.h"
+
+#include <emmintrin.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+// The error-free transformations (Fast2Sum, Veltkamp split) must not be contracted into FMAs
+// if this file is ever built for a CPU that has them.
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+namespace se3 {
+namespace detail {
+namespace {
+
+typedef double v2d __attribute__((vector_size(16)));
+typedef long long v2i __attribute__((vector_size(16)));
+
+struct alignas(16) Consts {
+  v2d two_over_pi, shift, p1, p2, p3, p4, split, half, one, bound;
+  v2d s1, s2, s3, s4, s5, s6, c1, c2, c3, c4, c5, c6;
+  v2i sign;
+};
+constexpr v2d dup(double a) {
+  return v2d{a, a};
+}
+const Consts kConsts = {
+    dup(0x1.45f306dc9c883p-1),   // 2/pi
+    dup(0x1.8p52),               // 1.5 2^52: adding and subtracting it rounds to an integer
+    dup(0x1.921fb54400000p+0),   // P1: pi/2 = P1 + P2 + P3 + P4 (step 2)
+    dup(0x1.0b46000000000p-34),  // P2
+    dup(0x1.1a62633000000p-54),  // P3
+    dup(0x1.45c06e0e68948p-86),  // P4
+    dup(134217729.0),            // Veltkamp splitter 2^27 + 1
+    dup(0.5),
+    dup(1.0),
+    dup(kSinCosBound),
+    dup(-0x1.5555555555548p-3),   // S1: sin A = A + A z (S1 + S2 z + ... + S6 z^5), z = A^2
+    dup(0x1.111111110f730p-7),    // S2
+    dup(-0x1.a01a019be9217p-13),  // S3
+    dup(0x1.71de35552b52cp-19),   // S4
+    dup(-0x1.ae5e4b83e46f4p-26),  // S5
+    dup(0x1.5d8b55946df43p-33),   // S6
+    dup(0x1.555555555554bp-5),    // C1: cos A = 1 - z/2 + z^2 (C1 + C2 z + ... + C6 z^5)
+    dup(-0x1.6c16c16c15015p-10),  // C2
+    dup(0x1.a01a019c8f254p-16),   // C3
+    dup(-0x1.27e4f7f19148bp-22),  // C4
+    dup(0x1.1ee9dbcefbddep-29),   // C5
+    dup(-0x1.8fa684877410cp-37),  // C6
+    v2i{INT64_MIN, INT64_MIN},    // sign bit
+};
+
+/// The constants through a pointer the compiler cannot see through. Otherwise GCC 12 (SSE2)
+/// builds every uniform vector constant from a scalar (movsd + unpcklpd, two instructions)
+/// instead of using it as a memory operand of the arithmetic.
+inline const Consts& consts() {
+  const Consts* k = &kConsts;
+  asm("" : "+r"(k));
+  return *k;
+}
+
+inline v2d load2(const double* p) {
+  v2d v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void store2(double* p, v2d v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+/// Bit i set where lane i has |x| <= B (not for NaN).
+inline int in_range(const Consts& K, v2d x) {
+  return _mm_movemask_pd((__m128d)((v2d)((v2i)x & ~K.sign) <= K.bound));
+}
+
+/// sin and cos of both lanes; correct only for lanes with |x| <= B (others: garbage, no traps).
+__attribute__((always_inline)) inline void kernel(const Consts& K, v2d x, v2d& so, v2d& co) {
+  const v2d ax = (v2d)((v2i)x & ~K.sign);
+  // 1. k = round(|x| 2/pi); y holds k in its low mantissa bits.
+  const v2d y = ax * K.two_over_pi + K.shift;
+  const v2d k = y - K.shift;
+  // 2. r = rh + rl = |x| - k pi/2.
+  const v2d s = (ax - k * K.p1) - k * K.p2;
+  const v2d kp3 = k * K.p3;
+  const v2d rh = s - kp3;
+  const v2d rl = ((s - rh) - kp3) - k * K.p4;
+  // 3. r = a + b, a with 26 bits.
+  const v2d t = rh * K.split;
+  const v2d a = t - (t - rh);
+  const v2d b = (rh - a) + rl;
+  // 4. Kernels at a, then the first and second order terms in b.
+  const v2d z = a * a;
+  const v2d hz = K.half * z;
+  const v2d w = K.one - hz;
+  const v2d corr = (K.one - w) - hz;
+  const v2d p = K.s1 + z * (K.s2 + z * (K.s3 + z * (K.s4 + z * (K.s5 + z * K.s6))));
+  const v2d q = K.c1 + z * (K.c2 + z * (K.c3 + z * (K.c4 + z * (K.c5 + z * K.c6))));
+  const v2d sp = (a * z) * p;         // sin a - a
+  const v2d cp = corr + (z * z) * q;  // cos a - w
+  const v2d sa = a + sp;              // sin a, rounded
+  const v2d ca = w + cp;              // cos a, rounded
+  const v2d hb = K.half * b;
+  const v2d sr = sa + (((a - sa) + sp) + b * (ca - hb * a));  // Fast2Sum(a, sp) + b terms
+  const v2d cr = w + (cp - b * (sa + hb * ca));
+  // 5. Quadrant: sin x = (S, C, -S, -C)[k & 3], cos x = (C, -S, -C, S)[k & 3].
+  const v2i qk = (v2i)y;
+  const v2i neg = (qk << 62) & K.sign;  // bit 1 of k
+  const v2i odd = qk << 63;             // bit 0 of k
+  const v2i swap = (v2i)_mm_srai_epi32(_mm_shuffle_epi32((__m128i)odd, 0xF5), 31);
+  const v2i sv = (v2i)sr ^ (neg ^ odd);  // sin out for even k, cos out for odd k
+  const v2i cv = (v2i)cr ^ neg;          // cos out for even k, sin out for odd k
+  const v2i d = (sv ^ cv) & swap;
+  so = (v2d)(sv ^ d ^ ((v2i)x & K.sign));
+  co = (v2d)(cv ^ d);
+}
+
+/// The general loop from element i on: lanes outside the fast path get std::sin/std::cos, or
+/// x - x (NaN, as they return) for NaN/Inf, which leaves errno alone.
+__attribute__((noinline, cold)) void sincos_from(const double* x, int n, double* s, double* c,
+                                                 int i) {
+  const Consts& K = consts();
+  for (; i < n; i += 2) {
+    const int m = i + 1 < n ? 2 : 1;
+    const v2d x0 = m == 2 ? load2(x + i) : v2d{x[i], 0.0};
+    v2d s0, c0;
+    kernel(K, x0, s0, c0);
+    for (int j = 0; j < m; ++j) {
+      const double v = x0[j];
+      if (std::fabs(v) <= kSinCosBound) {
+        s[i + j] = s0[j];
+        c[i + j] = c0[j];
+      } else if (std::isfinite(v)) {
+        s[i + j] = std::sin(v);
+        c[i + j] = std::cos(v);
+      } else {
+        s[i + j] = c[i + j] = v - v;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void sincos_n(const double* x, int n, double* s, double* c) {
+  // A loop without calls, so without registers to save. At the first pair with a lane outside
+  // the fast path, before anything of that pair is stored (s or c may be x), the general loop
+  // takes over.
+  const Consts& K = consts();
+  int i = 0;
+  for (; i + 2 <= n; i += 2) {
+    const v2d x0 = load2(x + i);
+    v2d s0, c0;
+    kernel(K, x0, s0, c0);
+    if (__builtin_expect(in_range(K, x0) != 3, 0)) return sincos_from(x, n, s, c, i);
+    store2(s + i, s0);
+    store2(c + i, c0);
+  }
+  if (i < n) {
+    const v2d x0 = {x[i], 0.0};
+    v2d s0, c0;
+    kernel(K, x0, s0, c0);
+    if (__builtin_expect(!(in_range(K, x0) & 1), 0)) return sincos_from(x, n, s, c, i);
+    s[i] = s0[0];
+    c[i] = c0[0];
+  }
+}
+
+}  // namespace detail
+}  // namespace se3
