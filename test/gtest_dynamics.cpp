@@ -471,16 +471,35 @@ TEST(Dynamics, MinvAccuracyCond1e7) {
 }
 
 // The long-double mass matrix of this file agrees with crba on every model (so it is a fair
-// reference above).
+// reference above), in both of crba's evaluations (local frames and world frame), whichever
+// the model's Data picks by default.
 TEST(Dynamics, LongDoubleMassMatrixMatchesCrba) {
   for (const Case& c : cases()) {
     const Model& m = c.model;
     Data d(m);
     std::mt19937_64 rng(109);
     const State s = se3_test::random_state(m, rng);
-    const MatX D = crba(m, d, s.base, s.q);
     const MatX DL = mass_matrix_long_double(m, s.base, s.q).cast<double>();
-    EXPECT_LE(rel_err(D, DL), 1e-13) << c.label;
+    for (const bool local : {true, false}) {
+      Data dv(m);
+      dv.crba_local = local;
+      EXPECT_LE(rel_err(crba(m, dv, s.base, s.q), DL), 1e-13)
+          << c.label << (local ? " (local frames)" : " (world frame)");
+    }
+    EXPECT_LE(rel_err(crba(m, d, s.base, s.q), DL), 1e-13) << c.label;
+  }
+}
+
+// The default evaluation is the cheaper one: local frames for shallow trees, world frame for
+// long chains.
+TEST(Dynamics, CrbaPicksItsEvaluationByDepth) {
+  EXPECT_TRUE(Data(make_chain(6, false)).crba_local);
+  EXPECT_TRUE(Data(make_chain(6, true)).crba_local);
+  EXPECT_FALSE(Data(make_chain(200, false)).crba_local);
+  for (const Case& c : cases()) {
+    if (c.label.find("solo12") != std::string::npos || c.label.find("ur5") != std::string::npos) {
+      EXPECT_TRUE(Data(c.model).crba_local) << c.label;
+    }
   }
 }
 

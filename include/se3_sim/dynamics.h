@@ -54,6 +54,10 @@ struct Data {
   std::vector<int> P_slot;
   /// First body of the run of consecutive-index ancestors ending at j (crba's row segments).
   std::vector<int> run_start;
+  /// crba in local frames (a wrench transform per ancestor-descendant pair) rather than in the
+  /// world frame (forward kinematics, world inertias, six multiply-adds per pair): chosen when
+  /// the pairs are few, i.e. for shallow trees (set from the model; may be overridden).
+  bool crba_local = true;
 };
 
 /// Positions of every body: Xup and oMb (the product of exponentials, section 5).

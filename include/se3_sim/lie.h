@@ -172,34 +172,7 @@ struct Inertia {
   }
   /// The same inertia expressed in the parent frame of f (body placed at f): with g = R h,
   /// h' = g + m p and I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2.
-  Inertia transformed(const SE3& f) const {
-    const double* R = f.R.data();  // column-major
-    const double* J = I.data();
-    const double px = f.p[0], py = f.p[1], pz = f.p[2];
-    // g = R h; Z = R I (column c: R I(:, c)); then I'(:, c) = Z R(c, :)^T, upper triangle.
-    double g[3], Z[9];
-    for (int r = 0; r < 3; ++r) g[r] = R[r] * h[0] + R[r + 3] * h[1] + R[r + 6] * h[2];
-    for (int c = 0; c < 3; ++c) {
-      const double i0 = J[3 * c], i1 = J[3 * c + 1], i2 = J[3 * c + 2];
-      for (int r = 0; r < 3; ++r) Z[3 * c + r] = R[r] * i0 + R[r + 3] * i1 + R[r + 6] * i2;
-    }
-    const double d = 2.0 * (px * g[0] + py * g[1] + pz * g[2]) + m * (px * px + py * py + pz * pz);
-    const double w0 = g[0] + 0.5 * m * px, w1 = g[1] + 0.5 * m * py, w2 = g[2] + 0.5 * m * pz;
-    Inertia out;
-    out.m = m;
-    out.h = Vec3(g[0] + m * px, g[1] + m * py, g[2] + m * pz);
-    double* o = out.I.data();
-    auto rot = [&](int r, int c) {  // (R I R^T)(r, c)
-      return Z[r] * R[c] + Z[r + 3] * R[c + 3] + Z[r + 6] * R[c + 6];
-    };
-    o[0] = rot(0, 0) - 2 * w0 * px + d;
-    o[4] = rot(1, 1) - 2 * w1 * py + d;
-    o[8] = rot(2, 2) - 2 * w2 * pz + d;
-    o[1] = o[3] = rot(0, 1) - (w0 * py + px * w1);
-    o[2] = o[6] = rot(0, 2) - (w0 * pz + px * w2);
-    o[5] = o[7] = rot(1, 2) - (w1 * pz + py * w2);
-    return out;
-  }
+  Inertia transformed(const SE3& f) const;
   Vec3 com() const { return m > 0 ? Vec3(h / m) : Vec3::Zero(); }
 };
 

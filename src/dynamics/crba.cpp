@@ -1,7 +1,14 @@
-// Mass matrix D of eq. (50), D = S^T G^T Ic G S, by composite rigid bodies in the world frame:
-// composite inertias then add without transforms, and D_ij = S_j^T (Ic_i S_i) for every
-// ancestor j of i (zero otherwise). Equivalent to the paper's route of n unit-acceleration RNEA
-// passes (section 6.1), in O(n d) instead of O(n^2).
+// Mass matrix D of eq. (50), D = S^T G^T Ic G S, by composite rigid bodies. Equivalent to the
+// paper's route of n unit-acceleration RNEA passes (section 6.1), in O(n d) instead of O(n^2).
+// Two evaluations of the same sums, chosen per model by their cost (Data::crba_local):
+//
+// - local frames (shallow trees: arms, legged robots): composite inertias Ic_p += Ad* Ic_i Ad^-1
+//   through the joint transforms (no forward kinematics), F_i = Ic_i S_i, and D_ji = S_j^T F_i
+//   as F_i travels inward through every ancestor j. The columns of a subtree are contiguous,
+//   so the whole block of F's travels at once, two columns per SSE2 register.
+// - world frame (deep chains): composite inertias add without transforms, and
+//   D_ji = S_j^T (Ic_i S_i) with world axes, six multiply-adds per entry instead of a wrench
+//   transform per entry.
 #include "joint.h"
 #include "se3_sim/dynamics.h"
 
@@ -11,7 +18,85 @@ using detail::load2;
 using detail::store2;
 using detail::v2d;
 
-const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q) {
+namespace {
+
+// x <- Ad*_{f^-1} x for the wrench columns x = (n0, n1, n2, f0, f1, f2) (eq. 19: (R n + p x R f,
+// R f)); T is double or v2d (two columns at once).
+template <class T>
+inline void force_to_parent(const double* R, const double* p, T (&x)[6]) {
+  T f[3], n[3];
+  for (int r = 0; r < 3; ++r) {
+    f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
+    n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];
+  }
+  x[0] = n[0] + (p[1] * f[2] - p[2] * f[1]);
+  x[1] = n[1] + (p[2] * f[0] - p[0] * f[2]);
+  x[2] = n[2] + (p[0] * f[1] - p[1] * f[0]);
+  x[3] = f[0], x[4] = f[1], x[5] = f[2];
+}
+
+const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
+  const int off = model.floating ? 6 : 0;
+  const int nv = model.nv;
+  detail::joint_transforms(model, data, q);
+  for (int i = model.floating ? 0 : 1; i <= model.n; ++i) data.Ic[i] = model.inertia[i];
+  double* F[6];
+  for (int r = 0; r < 6; ++r) F[r] = data.Fm.row(r).data();
+  double* M = data.M.data();  // column-major, leading dimension nv
+  for (int i = model.n; i >= 1; --i) {
+    const int p = model.parent[i];
+    const bool carry = p > 0 || model.floating;
+    const Inertia& Ic = data.Ic[i];  // complete: every descendant has been added
+    if (carry) data.Ic[p] += Ic.transformed(data.Xup[i]);
+    // F_i = Ic_i S_i: a column of eq. (23)'s matrix.
+    const int col = off + i - 1, end = off + model.subtree_end[i];  // subtree columns [col, end)
+    const double* I = Ic.I.data();
+    int k;
+    if (model.joint_type[i] == JointType::Revolute) {  // S = e_3
+      F[0][col] = I[6], F[1][col] = I[7], F[2][col] = I[8];
+      F[3][col] = -Ic.h[1], F[4][col] = Ic.h[0], F[5][col] = 0;
+      k = 2;
+    } else {  // S = e_6
+      F[0][col] = Ic.h[1], F[1][col] = -Ic.h[0], F[2][col] = 0;
+      F[3][col] = 0, F[4][col] = 0, F[5][col] = Ic.m;
+      k = 5;
+    }
+    // Row i of D over the subtree: D_ic = S_i^T F_c, every F_c of the subtree in frame i now.
+    double* mcol = M + static_cast<std::ptrdiff_t>(col) * nv;
+    for (int c = col; c < end; ++c) {
+      mcol[c] = F[k][c];
+      M[col + static_cast<std::ptrdiff_t>(c) * nv] = F[k][c];
+    }
+    if (!carry) continue;
+    const double* R = data.Xup[i].R.data();
+    const double* t = data.Xup[i].p.data();
+    int c = col;
+    for (; c + 2 <= end; c += 2) {
+      v2d x[6];
+      for (int r = 0; r < 6; ++r) x[r] = load2(F[r] + c);
+      force_to_parent(R, t, x);
+      for (int r = 0; r < 6; ++r) store2(F[r] + c, x[r]);
+    }
+    if (c < end) {
+      double x[6];
+      for (int r = 0; r < 6; ++r) x[r] = F[r][c];
+      force_to_parent(R, t, x);
+      for (int r = 0; r < 6; ++r) F[r][c] = x[r];
+    }
+  }
+  if (model.floating) {  // the base rows: S_0 = 1, the F's now in the base frame
+    for (int c = 6; c < nv; ++c) {
+      for (int r = 0; r < 6; ++r) {
+        M[r + static_cast<std::ptrdiff_t>(c) * nv] = F[r][c];
+        M[c + static_cast<std::ptrdiff_t>(r) * nv] = F[r][c];
+      }
+    }
+    data.M.topLeftCorner<6, 6>() = data.Ic[0].matrix();
+  }
+  return data.M;
+}
+
+const MatX& crba_world(const Model& model, Data& data, const SE3& base, const VecX& q) {
   const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
   forward_kinematics(model, data, base, q);
@@ -96,6 +181,12 @@ const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q)
     data.M.topLeftCorner<6, 6>() = data.Ic[0].transformed(data.oMb[0].inverse()).matrix();
   }
   return data.M;
+}
+
+}  // namespace
+
+const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q) {
+  return data.crba_local ? crba_local(model, data, q) : crba_world(model, data, base, q);
 }
 
 }  // namespace se3

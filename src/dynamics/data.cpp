@@ -2,6 +2,11 @@
 
 namespace se3 {
 
+namespace {
+// crba runs in local frames when the ancestor-descendant pairs are at most this many per body.
+constexpr int kCrbaLocalPairsPerBody = 8;
+}  // namespace
+
 Data::Data(const Model& model) {
   const size_t nb = static_cast<size_t>(model.n) + 1;
   Xup.assign(nb, SE3());
@@ -24,6 +29,11 @@ Data::Data(const Model& model) {
   for (int j = 1; j <= model.n; ++j) {
     run_start[j] = (j > 1 && model.parent[j] == j - 1) ? run_start[j - 1] : j;
   }
+  // Ancestor-descendant pairs: a wrench transform each in local frames, against about a
+  // forward-kinematics step, a world inertia and an axis per body in the world frame.
+  long pairs = 0;
+  for (int i = 1; i <= model.n; ++i) pairs += model.subtree_end[i] - i;
+  crba_local = pairs <= kCrbaLocalPairsPerBody * model.n;
   tau = VecX::Zero(model.nv);
   ddq = VecX::Zero(model.nv);
   nle = VecX::Zero(model.nv);

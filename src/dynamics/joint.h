@@ -56,19 +56,6 @@ inline void joint_transform(const SE3& Xt, JointType t, double q, SE3& out) {
   }
 }
 
-/// out = a * b for poses (out must be neither): rotation R_a R_b, position R_a p_b + p_a.
-inline void compose(const SE3& a, const SE3& b, SE3& out) {
-  const double* A = a.R.data();
-  const double* B = b.R.data();
-  double* O = out.R.data();
-  for (int c = 0; c < 3; ++c) {
-    const double b0 = B[3 * c], b1 = B[3 * c + 1], b2 = B[3 * c + 2];
-    for (int r = 0; r < 3; ++r) O[3 * c + r] = A[r] * b0 + A[r + 3] * b1 + A[r + 6] * b2;
-  }
-  const double p0 = b.p[0], p1 = b.p[1], p2 = b.p[2];
-  for (int r = 0; r < 3; ++r) out.p[r] = A[r] * p0 + A[r + 3] * p1 + A[r + 6] * p2 + a.p[r];
-}
-
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
 /// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
 void joint_transforms(const Model& model, Data& data, const VecX& q);

@@ -3,6 +3,7 @@
 #include "se3_sim/lie.h"
 
 #include <cmath>
+#include <cstring>
 
 namespace se3 {
 namespace {
@@ -233,6 +234,52 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
 // b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
 // (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
 // symmetric result needs only its upper triangle. A hot path of crba, minv and aba.
+namespace {
+typedef double v2d __attribute__((vector_size(16)));  // SSE2 pair (GCC/Clang vector extension)
+inline v2d load2(const double* p) {
+  v2d r;
+  std::memcpy(&r, p, sizeof r);
+  return r;
+}
+}  // namespace
+
+// Column by column, each 3-vector as an (x, y) pair and a z: Z = R I, then I' = Z R^T.
+Inertia Inertia::transformed(const SE3& f) const {
+  const double* R = f.R.data();  // column-major
+  const double* J = I.data();
+  const v2d r0 = load2(R), r1 = load2(R + 3), r2 = load2(R + 6);
+  const double r0z = R[2], r1z = R[5], r2z = R[8];
+  const v2d gxy = r0 * h[0] + r1 * h[1] + r2 * h[2];
+  const double gz = r0z * h[0] + r1z * h[1] + r2z * h[2];
+  v2d Zxy[3];
+  double Zz[3];
+  for (int c = 0; c < 3; ++c) {
+    const double i0 = J[3 * c], i1 = J[3 * c + 1], i2 = J[3 * c + 2];
+    Zxy[c] = r0 * i0 + r1 * i1 + r2 * i2;
+    Zz[c] = r0z * i0 + r1z * i1 + r2z * i2;
+  }
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  const double gx = gxy[0], gy = gxy[1];
+  const double d = 2.0 * (px * gx + py * gy + pz * gz) + m * (px * px + py * py + pz * pz);
+  const double w0 = gx + 0.5 * m * px, w1 = gy + 0.5 * m * py, w2 = gz + 0.5 * m * pz;
+  // (R I R^T)(:, c) = sum_k Z(:, k) R(c, k).
+  const v2d c1 = Zxy[0] * R[1] + Zxy[1] * R[4] + Zxy[2] * R[7];  // rows 0, 1 of column 1
+  const v2d c2 = Zxy[0] * R[2] + Zxy[1] * R[5] + Zxy[2] * R[8];  // rows 0, 1 of column 2
+  const double a00 = Zxy[0][0] * R[0] + Zxy[1][0] * R[3] + Zxy[2][0] * R[6];
+  const double a22 = Zz[0] * R[2] + Zz[1] * R[5] + Zz[2] * R[8];
+  Inertia out;
+  out.m = m;
+  out.h = Vec3(gx + m * px, gy + m * py, gz + m * pz);
+  double* o = out.I.data();
+  o[0] = a00 - 2 * w0 * px + d;
+  o[4] = c1[1] - 2 * w1 * py + d;
+  o[8] = a22 - 2 * w2 * pz + d;
+  o[1] = o[3] = c1[0] - (w0 * py + px * w1);
+  o[2] = o[6] = c2[0] - (w0 * pz + px * w2);
+  o[5] = o[7] = c2[1] - (w1 * pz + py * w2);
+  return out;
+}
+
 Mat6 spatial_inertia(double m, const Vec3& r, const Mat3& I_G) {
   return Inertia::from_com(m, r, I_G).matrix();
 }
