@@ -15,6 +15,7 @@
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
+
 const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q) {
   const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
@@ -78,23 +79,70 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     if (carry) data.IA[p] += IA - (U * Dinv) * U.transpose();  // (59), (63)
   }
   if (model.floating) {
-    // S_0 = 1 in the base frame: Omega_0 = Ad^T IA_0 Ad, row block = Omega_0^-1 (E - Ad^T F).
+    // S_0 = 1 in the base frame: Omega_0 = Ad^T IA_0 Ad, row block = Omega_0^-1 (E - Ad^T F),
+    // E the first six columns of the identity. Row operations on the 6 x nv blocks (each row
+    // contiguous), Omega_0 = L L^T by Cholesky.
     const SE3& f0 = data.oMb[0];
     const Mat6 Adf = Ad(f0);
     const Mat6 Omega0 = Adf.transpose() * data.IA[0] * Adf;
     const Eigen::LLT<Mat6> llt(Omega0);
+    const Mat6 L = llt.matrixL();
     Data::Mat6X& P0 = data.Pm[data.P_slot[0]];
-    const Mat6 minus_AdT = -Adf.transpose();
-    P0.noalias() = minus_AdT * F;
-    P0.leftCols<6>() += Mat6::Identity();
-    llt.solveInPlace(P0);
+    double* pr[6];
+    const double* fr[6];
+    for (int k = 0; k < 6; ++k) pr[k] = P0.row(k).data(), fr[k] = F.row(k).data();
+    for (int k = 0; k < 6; ++k) {  // row k of E - Ad^T F
+      const double a0 = Adf(0, k), a1 = Adf(1, k), a2 = Adf(2, k), a3 = Adf(3, k), a4 = Adf(4, k),
+                   a5 = Adf(5, k);
+      double* o = pr[k];
+      for (int j = 0; j < nv; ++j) {
+        o[j] = -(a0 * fr[0][j] + a1 * fr[1][j] + a2 * fr[2][j] + a3 * fr[3][j] + a4 * fr[4][j] +
+                 a5 * fr[5][j]);
+      }
+      o[k] += 1.0;
+    }
+    for (int k = 0; k < 6; ++k) {  // L y = x, row by row
+      double* o = pr[k];
+      for (int l = 0; l < k; ++l) {
+        const double c = L(k, l);
+        const double* y = pr[l];
+        for (int j = 0; j < nv; ++j) o[j] -= c * y[j];
+      }
+      const double d = 1.0 / L(k, k);
+      for (int j = 0; j < nv; ++j) o[j] *= d;
+    }
+    for (int k = 5; k >= 0; --k) {  // L^T x = y
+      double* o = pr[k];
+      for (int l = k + 1; l < 6; ++l) {
+        const double c = L(l, k);
+        const double* y = pr[l];
+        for (int j = 0; j < nv; ++j) o[j] -= c * y[j];
+      }
+      const double d = 1.0 / L(k, k);
+      for (int j = 0; j < nv; ++j) o[j] *= d;
+    }
     Mi.leftCols<6>() = P0.transpose();
-    P0.noalias() = Adf * Mi.leftCols<6>().transpose();  // base accelerations, world frame
+    Mi.topRightCorner(6, nv - 6) = P0.rightCols(nv - 6);
+    for (int c = 1; c < 6; ++c) {
+      for (int r = 0; r < c; ++r) Mi(r, c) = Mi(c, r);  // exactly symmetric
+    }
+    // The base accelerations in the world frame, Ad P0, into F (free now); then F and P0 swap.
+    for (int k = 0; k < 6; ++k) {
+      const double a0 = Adf(k, 0), a1 = Adf(k, 1), a2 = Adf(k, 2), a3 = Adf(k, 3), a4 = Adf(k, 4),
+                   a5 = Adf(k, 5);
+      double* o = F.row(k).data();
+      for (int j = 0; j < nv; ++j) {
+        o[j] = a0 * pr[0][j] + a1 * pr[1][j] + a2 * pr[2][j] + a3 * pr[3][j] + a4 * pr[4][j] +
+               a5 * pr[5][j];
+      }
+    }
+    P0.swap(F);
   }
   for (int i = 1; i <= model.n; ++i) {
     const int p = model.parent[i];
     const int row = off + i - 1;
     double* r = Mi.col(row).data();
+    double* mrow = Mi.data() + row;  // row `row` of D^-1, stride nv
     const Vec6& S = data.S[i];
     Data::Mat6X& Pi = data.Pm[data.P_slot[i]];
     double* q0 = Pi.row(0).data();
@@ -121,6 +169,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
         const double x =
             r[j] - (w0 * a0 + w1 * a1 + w2 * a2 + w3 * a3 + w4 * a4 + w5 * a5);  // (58)
         r[j] = x;
+        mrow[static_cast<std::ptrdiff_t>(j) * nv] = x;
         q0[j] = a0 + s0 * x;
         q1[j] = a1 + s1 * x;
         q2[j] = a2 + s2 * x;
@@ -132,6 +181,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
 #pragma GCC ivdep
       for (int j = row; j < nv; ++j) {
         const double x = r[j];
+        mrow[static_cast<std::ptrdiff_t>(j) * nv] = x;
         q0[j] = s0 * x;
         q1[j] = s1 * x;
         q2[j] = s2 * x;
@@ -141,7 +191,6 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
       }
     }
   }
-  Mi.triangularView<Eigen::StrictlyUpper>() = Mi.transpose();
   return Mi;
 }
 
