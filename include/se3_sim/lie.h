@@ -173,6 +173,8 @@ struct Inertia {
   /// The same inertia expressed in the parent frame of f (body placed at f): with g = R h,
   /// h' = g + m p and I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2.
   Inertia transformed(const SE3& f) const;
+  /// out += transformed(f), without the temporary (composite-inertia sums).
+  void add_transformed(const SE3& f, Inertia& out) const;
   Vec3 com() const { return m > 0 ? Vec3(h / m) : Vec3::Zero(); }
 };
 

@@ -47,7 +47,7 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     const int p = model.parent[i];
     const bool carry = p > 0 || model.floating;
     const Inertia& Ic = data.Ic[i];  // complete: every descendant has been added
-    if (carry) data.Ic[p] += Ic.transformed(data.Xup[i]);
+    if (carry) Ic.add_transformed(data.Xup[i], data.Ic[p]);
     // F_i = Ic_i S_i: a column of eq. (23)'s matrix.
     const int col = off + i - 1, end = off + model.subtree_end[i];  // subtree columns [col, end)
     const double* I = Ic.I.data();

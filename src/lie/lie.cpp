@@ -243,10 +243,17 @@ inline v2d load2(const double* p) {
 }
 }  // namespace
 
-// Column by column, each 3-vector as an (x, y) pair and a z: Z = R I, then I' = Z R^T.
-Inertia Inertia::transformed(const SE3& f) const {
+// Column by column, each 3-vector as an (x, y) pair and a z: Z = R I, then I' = Z R^T; the
+// result is written (add = false) or added (add = true) to `out` entry by entry, scalar stores
+// only, so that no wide load has to wait on them.
+namespace {
+
+template <bool add>
+void transform_inertia(const Inertia& in, const SE3& f, Inertia& out) {
+  const double m = in.m;
+  const Vec3& h = in.h;
   const double* R = f.R.data();  // column-major
-  const double* J = I.data();
+  const double* J = in.I.data();
   const v2d r0 = load2(R), r1 = load2(R + 3), r2 = load2(R + 6);
   const double r0z = R[2], r1z = R[5], r2z = R[8];
   const v2d gxy = r0 * h[0] + r1 * h[1] + r2 * h[2];
@@ -267,17 +274,39 @@ Inertia Inertia::transformed(const SE3& f) const {
   const v2d c2 = Zxy[0] * R[2] + Zxy[1] * R[5] + Zxy[2] * R[8];  // rows 0, 1 of column 2
   const double a00 = Zxy[0][0] * R[0] + Zxy[1][0] * R[3] + Zxy[2][0] * R[6];
   const double a22 = Zz[0] * R[2] + Zz[1] * R[5] + Zz[2] * R[8];
-  Inertia out;
-  out.m = m;
-  out.h = Vec3(gx + m * px, gy + m * py, gz + m * pz);
+  auto put = [](double& dst, double v) {
+    if (add) {
+      dst += v;
+    } else {
+      dst = v;
+    }
+  };
+  put(out.m, m);
+  put(out.h[0], gx + m * px);
+  put(out.h[1], gy + m * py);
+  put(out.h[2], gz + m * pz);
   double* o = out.I.data();
-  o[0] = a00 - 2 * w0 * px + d;
-  o[4] = c1[1] - 2 * w1 * py + d;
-  o[8] = a22 - 2 * w2 * pz + d;
-  o[1] = o[3] = c1[0] - (w0 * py + px * w1);
-  o[2] = o[6] = c2[0] - (w0 * pz + px * w2);
-  o[5] = o[7] = c2[1] - (w1 * pz + py * w2);
+  const double i01 = c1[0] - (w0 * py + px * w1);
+  const double i02 = c2[0] - (w0 * pz + px * w2);
+  const double i12 = c2[1] - (w1 * pz + py * w2);
+  put(o[0], a00 - 2 * w0 * px + d);
+  put(o[4], c1[1] - 2 * w1 * py + d);
+  put(o[8], a22 - 2 * w2 * pz + d);
+  put(o[1], i01), put(o[3], i01);
+  put(o[2], i02), put(o[6], i02);
+  put(o[5], i12), put(o[7], i12);
+}
+
+}  // namespace
+
+Inertia Inertia::transformed(const SE3& f) const {
+  Inertia out;
+  transform_inertia<false>(*this, f, out);
   return out;
+}
+
+void Inertia::add_transformed(const SE3& f, Inertia& out) const {
+  transform_inertia<true>(*this, f, out);
 }
 
 Mat6 spatial_inertia(double m, const Vec3& r, const Mat3& I_G) {
