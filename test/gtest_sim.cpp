@@ -30,7 +30,7 @@ std::string scene_error(const std::string& text) {
 }  // namespace
 
 TEST(Scene, EveryShippedSceneLoadsBuildsAndRuns) {
-  for (const char* name : {"satellite_arm", "fixed_arm", "chain20", "pendulum"}) {
+  for (const char* name : {"satellite_arm", "fixed_panda", "fixed_arm", "chain20", "pendulum"}) {
     SCOPED_TRACE(name);
     const Scene s = load_scene(kScenes + name + ".yaml");
     EXPECT_EQ(s.name, name);
@@ -77,6 +77,25 @@ TEST(Scene, SatelliteArmIsTheFreeFloatingPandaWithLockedFingersAndABus) {
   EXPECT_GT(sim->state().v[6], 0.1);        // joint 1 turns positively
   EXPECT_LT(w_base_world.z(), -1e-3);       // the bus turns the other way
   EXPECT_LT(sim->momentum().norm(), 1e-9);  // and nothing was gained overall
+}
+
+TEST(Scene, FixedPandaIsTheSevenDofArmOnAFixedBaseUnderGravity) {
+  const Scene s = load_scene(kScenes + "fixed_panda.yaml");
+  EXPECT_FALSE(s.floating);
+  EXPECT_EQ(s.gravity, Vec3(0, 0, -9.81));
+  EXPECT_EQ(s.integrator, "symplectic_euler");
+  EXPECT_EQ(s.dt, 1e-3);
+  auto sim = make_simulator(s);
+  const Model& m = sim->model();
+  EXPECT_EQ(m.n, 7);
+  EXPECT_EQ(m.nv, 7);
+  EXPECT_EQ(m.joint_index("panda_finger_joint1"), -1);
+  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  // Released from rest, it falls: kinetic energy grows from zero, potential energy drops.
+  EXPECT_EQ(sim->kinetic_energy(), 0.0);
+  ASSERT_EQ(sim->step_n(100), 100) << sim->failure();
+  EXPECT_GT(sim->kinetic_energy(), 1e-3);
+  EXPECT_LT(sim->potential_energy(), -1e-3);
 }
 
 TEST(Scene, RelativeRobotPathsResolveAgainstTheSceneOrThePackage) {
