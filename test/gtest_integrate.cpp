@@ -343,6 +343,46 @@ TEST(Passive, DampingAndFrictionDissipateEnergy) {
   }
 }
 
+// The passive forces a stepper applies: damping -d qdot and friction -f tanh(qdot / eps) on
+// exactly the joints that have them, nothing on the base, nothing when switched off; and the
+// acceleration is ABA's under command plus passive forces.
+TEST(Passive, ForcesActOnTheDampedAndRubbingJointsOnly) {
+  Model m = make_chain(4, true);
+  m.damping[1] = 0.5;   // damping only
+  m.friction[2] = 0.3;  // friction only
+  m.damping[3] = 0.2;   // both
+  m.friction[3] = 0.7;  // joint 4: neither
+  const State x = random_state(m, 21);
+  VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < m.nv; ++k) tau[k] = 0.1 * (k + 1);
+  StepperOptions opt;
+  opt.friction_eps = 0.05;
+  auto st = make_stepper("symplectic_euler", m, opt);
+  VecX expected = VecX::Zero(m.nv);
+  for (int i = 1; i <= m.n; ++i) {
+    const double qd = x.v[5 + i];
+    expected[5 + i] = -(m.damping[i] * qd + m.friction[i] * std::tanh(qd / opt.friction_eps));
+  }
+  VecX passive(m.nv);
+  st->passive_forces(x.v, passive);
+  EXPECT_LE((passive - expected).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_EQ(passive.head<6>().norm(), 0.0);
+  EXPECT_EQ(passive[5 + 4], 0.0);  // joint 4
+  EXPECT_NE(passive[5 + 1], 0.0);
+  EXPECT_NE(passive[5 + 2], 0.0);
+  EXPECT_NE(passive[5 + 3], 0.0);
+  Data d(m);
+  const VecX total = tau + passive;
+  const VecX a_ref = aba(m, d, x.base, x.q, x.v, total);
+  EXPECT_LE((st->acceleration(x.base, x.q, x.v, tau) - a_ref).cwiseAbs().maxCoeff(), 1e-12);
+  // Switched off: no passive force, the plain ABA acceleration.
+  opt.passive_forces = false;
+  auto off = make_stepper("symplectic_euler", m, opt);
+  off->passive_forces(x.v, passive);
+  EXPECT_EQ(passive.norm(), 0.0);
+  EXPECT_EQ(off->acceleration(x.base, x.q, x.v, tau), aba(m, d, x.base, x.q, x.v, tau));
+}
+
 TEST(Effort, CommandsAreClampedToTheUrdfLimits) {
   const std::string panda = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
   UrdfOptions o;
