@@ -130,7 +130,7 @@ class RkmkStepper final : public Stepper {
       } else if (fl) {
         const SE3 fi = x.base * exp_se3(xi);
         kv_[i] = acceleration(fi, qi_, vi, tau);
-        kxi_[i].noalias() = dexp_inv_se3(-xi) * vi.head<6>();
+        kxi_[i] = dexp_inv_se3_times(-xi, vi.head<6>());
       } else {
         kv_[i] = acceleration(x.base, qi_, vi, tau);
       }
