@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "se3_sim/integrate.h"
@@ -247,6 +248,45 @@ TEST(Convergence, Rkmk45MeetsItsToleranceAndRejectsSteps) {
   const StepInfo info = st->step(x, VecX::Zero(m.nv), 0.5);
   EXPECT_TRUE(info.ok);
   EXPECT_GT(info.rejected, 0);
+}
+
+TEST(State, FiniteMeansEveryNumberFiniteAndTheRotationOrthonormal) {
+  const Model m = make_chain(3, true);
+  const State good = random_state(m, 7);
+  State x = good;
+  x.base.R = exp_so3(Vec3(0.3, -1.2, 2.0));
+  EXPECT_TRUE(x.finite());
+  x.base.R(0, 1) += 1e-9;  // orthonormal to 1e-6
+  EXPECT_TRUE(x.finite());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double bad : {nan, inf, -inf}) {
+    x = good;
+    x.q[2] = bad;
+    EXPECT_FALSE(x.finite()) << "q " << bad;
+    x = good;
+    x.v[8] = bad;
+    EXPECT_FALSE(x.finite()) << "v " << bad;
+    x = good;
+    x.base.p[1] = bad;
+    EXPECT_FALSE(x.finite()) << "p " << bad;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        x = good;
+        x.base.R(r, c) = bad;
+        EXPECT_FALSE(x.finite()) << "R(" << r << ", " << c << ") " << bad;
+      }
+    }
+  }
+  x = good;
+  x.base.R *= 1 + 1e-5;  // not orthonormal
+  EXPECT_FALSE(x.finite());
+  x = good;
+  x.base.R(2, 0) += 1e-5;
+  EXPECT_FALSE(x.finite());
+  x = good;
+  x.q.setConstant(1e300);  // large but finite
+  EXPECT_TRUE(x.finite());
 }
 
 TEST(Guard, DivergenceRollsBackAndReports) {

@@ -11,11 +11,27 @@ namespace se3 {
 
 State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
 
+namespace {
+
+// Whether every entry is finite: x - x is 0 for a finite x and NaN for an inf or a NaN, and a
+// sum with a NaN in it is NaN. Eigen vectorizes the sum (no early exit).
+template <class Derived>
+bool all_finite(const Eigen::MatrixBase<Derived>& x) {
+  return (x - x).sum() == 0;
+}
+
+}  // namespace
+
 bool State::finite() const {
-  if (!q.allFinite() || !v.allFinite() || !base.R.allFinite() || !base.p.allFinite()) {
-    return false;
-  }
-  return (base.R.transpose() * base.R - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-6;
+  // The six distinct entries of R^T R - I; a non-finite R fails here too (inf or NaN on the
+  // diagonal).
+  const Mat3& R = base.R;
+  const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
+                       R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
+                       R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
+  bool ok = all_finite(q) && all_finite(v) && all_finite(base.p);
+  for (double x : e) ok &= std::abs(x) < 1e-6;
+  return ok;
 }
 
 Stepper::Stepper(const Model& model, const StepperOptions& opt)
