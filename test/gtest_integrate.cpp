@@ -4,9 +4,11 @@
 // the divergence guard, damping and friction, effort limits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "se3_sim/integrate.h"
 #include "se3_sim/sim.h"
@@ -325,6 +327,37 @@ TEST(Guard, DivergenceRollsBackAndReports) {
   EXPECT_TRUE(sim.failure().empty());
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(state_err(sim.state(), x0), 0.0);
+}
+
+// The energy check runs every energy_check_every steps; a failed one rolls back to the state
+// of the last check (the states since were never checked), with its time and step count.
+TEST(Guard, EnergyAboveTheLimitRollsBackToTheLastCheckedState) {
+  Model m = make_chain(3, true);
+  m.gravity.setZero();
+  const State x0 = random_state(m, 5);
+  SimConfig cfg;
+  cfg.integrator = "rkmk4";
+  cfg.guard.energy_check_every = 4;
+  Simulator probe(m, x0, cfg);
+  const double T0 = probe.initial_kinetic_energy();
+  const double E_ref = std::max(T0, 0.5 * m.total_mass());  // zero gravity (sim.h)
+  cfg.guard.energy_growth = 1.1 * T0 / E_ref;               // limit: T0 + 10 %
+  Simulator sim(m, x0, cfg);
+  sim.set_joint_effort(1, 2.0);  // pumps energy in
+  std::vector<State> states = {sim.state()};
+  while (sim.step()) states.push_back(sim.state());
+  const std::uint64_t failed_at = states.size();  // the step that failed the check
+  ASSERT_GT(failed_at, 8u);                       // a check passed before
+  ASSERT_LT(failed_at, 1000u);
+  EXPECT_EQ(failed_at % 4, 0u) << "only check steps test the energy";
+  EXPECT_NE(sim.failure().find("kinetic energy"), std::string::npos) << sim.failure();
+  EXPECT_EQ(sim.steps(), failed_at - 4);
+  EXPECT_NEAR(sim.time(), (failed_at - 4) * cfg.dt, 1e-12);
+  EXPECT_EQ(state_err(sim.state(), states[failed_at - 4]), 0.0);
+  EXPECT_LE(sim.kinetic_energy(), 1.1 * T0);
+  // Below the limit all the way: a torque-free run at a limit 10 % above its (kept) energy.
+  Simulator free(m, x0, cfg);
+  EXPECT_EQ(free.step_n(400), 400) << free.failure();
 }
 
 TEST(Guard, StiffDampingWithExplicitEulerIsCaught) {

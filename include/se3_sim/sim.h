@@ -170,7 +170,10 @@ class Simulator {
 
  private:
   void refresh_reference();
-  bool check_rates(std::string& why) const;
+  /// The guard's checks (cheap; the reason is found again only after a failure).
+  bool rates_ok() const;
+  bool energy_ok();
+  void roll_back(const StepInfo& info);
 
   std::unique_ptr<Model> model_;
   SimConfig config_;
@@ -179,9 +182,10 @@ class Simulator {
   Data diag_;
   State initial_, state_, last_good_, last_checked_;
   VecX command_;
-  double time_ = 0, last_good_time_ = 0, last_checked_time_ = 0;
+  double time_ = 0, last_checked_time_ = 0;
   std::uint64_t steps_ = 0, substeps_ = 0, rejected_ = 0, evaluations_ = 0;
-  std::uint64_t last_good_steps_ = 0, last_checked_steps_ = 0;
+  std::uint64_t last_checked_steps_ = 0;
+  int steps_to_energy_check_ = 1;  ///< the energy is checked on the step that takes it to 0
   std::string failure_;
   double T0_ = 0, U0_ = 0, E_ref_ = 1;
 };
