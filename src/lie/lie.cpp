@@ -112,15 +112,21 @@ Mat3 left_jacobian_inv_so3(const Vec3& a) {
   return Mat3::Identity() - 0.5 * A + D * A * A;
 }
 
-// Eqs. (6), (8), (10).
+// Eqs. (6), (8), (10), without 3x3 products: hat(a)^2 = a a^T - t^2 1, so
+// R = (1 - B t^2) 1 + A hat(a) + B a a^T, and p = l + B a x l + C a x (a x l).
 SE3 exp_se3(const Vec6& xi) {
-  const Vec3 a = xi.head<3>();
-  const RodriguesCoeffs k(a.norm());
-  const Mat3 A = hat(a);
-  const Mat3 A2 = A * A;
+  const Vec3 a = xi.head<3>(), l = xi.tail<3>();
+  const double t2 = a.squaredNorm();
+  const RodriguesCoeffs k(std::sqrt(t2));
   SE3 f;
-  f.R = Mat3::Identity() + k.A * A + k.B * A2;
-  f.p = xi.tail<3>() + k.B * (A * xi.tail<3>()) + k.C * (A2 * xi.tail<3>());
+  const Vec3 Ba = k.B * a, Aa = k.A * a;
+  f.R.noalias() = Ba * a.transpose();
+  f.R.diagonal().array() += 1.0 - k.B * t2;
+  f.R(0, 1) -= Aa.z(), f.R(1, 0) += Aa.z();
+  f.R(0, 2) += Aa.y(), f.R(2, 0) -= Aa.y();
+  f.R(1, 2) -= Aa.x(), f.R(2, 1) += Aa.x();
+  const Vec3 al = a.cross(l);
+  f.p = l + k.B * al + k.C * a.cross(al);
   return f;
 }
 
