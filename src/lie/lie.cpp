@@ -210,16 +210,15 @@ Mat3 dexp_coupling(const Vec3& a, const Vec3& l) {
          k.c3 * (ALA * A + A * ALA);
 }
 
-// Q(a, l) w by cross products (hat(x) y = x cross y), right to left.
-Vec3 dexp_coupling_times(const Vec3& a, const Vec3& l, const Vec3& w) {
-  const DexpCouplingCoeffs k(a.norm());
-  const Vec3 lw = l.cross(w), aw = a.cross(w);
-  const Vec3 alw = a.cross(lw);            // AL w
-  const Vec3 law = l.cross(aw);            // LA w
-  const Vec3 alaw = a.cross(law);          // ALA w
-  const Vec3 laaw = l.cross(a.cross(aw));  // LAA w
-  return 0.5 * lw + k.c1 * (alw + law + alaw) + k.c2 * (a.cross(alw) + laaw - 3.0 * alaw) +
-         k.c3 * (a.cross(laaw) + a.cross(alaw));
+// Q(a, l) w by cross products (hat(x) y = x cross y), with the terms that start with A
+// gathered: Q w = 0.5 Lw + c1 LAw + c2 LAAw + A (c1 Lw + (c1 - 3 c2) LAw + c3 LAAw)
+//                 + AA (c2 Lw + c3 LAw).
+Vec3 dexp_coupling_times(const DexpCouplingCoeffs& k, const Vec3& a, const Vec3& l, const Vec3& w) {
+  const Vec3 aw = a.cross(w);
+  const Vec3 lw = l.cross(w), law = l.cross(aw), laaw = l.cross(a.cross(aw));
+  const Vec3 u = k.c1 * lw + (k.c1 - 3.0 * k.c2) * law + k.c3 * laaw;
+  const Vec3 uu = k.c2 * lw + k.c3 * law;
+  return 0.5 * lw + k.c1 * law + k.c2 * laaw + a.cross(u + a.cross(uu));
 }
 }  // namespace
 
@@ -246,14 +245,16 @@ Mat6 dexp_inv_se3(const Vec6& xi) {
 // [Ji, 0; -Ji Q Ji, Ji] [w; u] = [Ji w; Ji (u - Q Ji w)], Ji w = w - a x w / 2 + D a x (a x w).
 Vec6 dexp_inv_se3_times(const Vec6& xi, const Vec6& V) {
   const Vec3 a = xi.head<3>();
-  const double D = left_jacobian_inv_coeff(a.norm());
+  const double t = a.norm();
+  const double D = left_jacobian_inv_coeff(t);
   const auto Ji = [&](const Vec3& w) -> Vec3 {
     const Vec3 aw = a.cross(w);
     return w - 0.5 * aw + D * a.cross(aw);
   };
   Vec6 r;
   r.head<3>() = Ji(V.head<3>());
-  r.tail<3>() = Ji(V.tail<3>() - dexp_coupling_times(a, xi.tail<3>(), r.head<3>()));
+  r.tail<3>() =
+      Ji(V.tail<3>() - dexp_coupling_times(DexpCouplingCoeffs(t), a, xi.tail<3>(), r.head<3>()));
   return r;
 }
 
