@@ -120,6 +120,7 @@ class Stepper {
   // The passive forces, gathered once from the model (nothing when opt_.passive_forces is off).
   bool has_passive_ = false;  ///< any damping or friction
   VecX damping_;              ///< size nv, zero on the base and undamped joints
+  double inv_eps_;            ///< 1 / opt_.friction_eps
   std::vector<FrictionJoint> friction_;
 };
 

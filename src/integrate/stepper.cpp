@@ -39,7 +39,8 @@ Stepper::Stepper(const Model& model, const StepperOptions& opt)
       opt_(opt),
       data_(model),
       tau_(VecX::Zero(model.nv)),
-      damping_(VecX::Zero(model.nv)) {
+      damping_(VecX::Zero(model.nv)),
+      inv_eps_(1.0 / opt.friction_eps) {
   if (!(opt_.friction_eps > 0)) throw std::invalid_argument("friction_eps must be positive");
   if (!opt_.passive_forces) return;
   const int off = model.floating ? 6 : 0;
@@ -55,9 +56,8 @@ Stepper::Stepper(const Model& model, const StepperOptions& opt)
 // -(d qdot + f tanh(qdot / eps)) on the joints with friction.
 void Stepper::passive_forces(const VecX& v, VecX& out) const {
   out.noalias() = -damping_.cwiseProduct(v);
-  const double inv_eps = 1.0 / opt_.friction_eps;
   for (const FrictionJoint& j : friction_) {
-    out[j.k] = -(j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps));
+    out[j.k] = -(j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
   }
 }
 
@@ -66,9 +66,8 @@ const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
   const VecX* tau = &tau_cmd;
   if (has_passive_) {  // tau_ = tau_cmd + passive forces, as passive_forces() computes them
     tau_.noalias() = tau_cmd - damping_.cwiseProduct(v);
-    const double inv_eps = 1.0 / opt_.friction_eps;
     for (const FrictionJoint& j : friction_) {
-      tau_[j.k] = tau_cmd[j.k] - (j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps));
+      tau_[j.k] = tau_cmd[j.k] - (j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
     }
     tau = &tau_;
   }
