@@ -1,10 +1,21 @@
 // One time step per scene and integrator, side by side with the ABA call it is built on.
-// Each step benchmark reports `aba_ns` (the same scene's ABA, measured in the same run) and
-// `x_aba` = step time / ABA time. Targets (issue 3): symplectic_euler <= 1.2, rkmk4 <= 4.5.
-// `rtf/<scene>` reports the headless real-time factor at the scene's 1 kHz (simulated seconds
-// per wall second, zero torques, diagnostics excluded).
 //
-//   cd <package> && devel/lib/se3_sim/bench_step [--benchmark_filter=satellite]
+//   step/<scene>/<integrator>      the bare Stepper::step (no guard, no bookkeeping)
+//   sim_step/<scene>/<integrator>  the whole Simulator::step, as a user or the node runs it:
+//                                  stepper, divergence guard, last-good copies, counters
+//   aba/<scene>                    ABA alone at the scene's initial state
+//   rtf/<scene>                    headless real-time factor at the scene's step (simulated
+//                                  seconds per wall second, zero torques, diagnostics excluded)
+//
+// Step and ABA are timed in the same run, interleaved: each of kBatches batches times k calls
+// of the step, then k ABA calls of the same scene (k chosen so that k ABA calls take about
+// 200 us), in thread CPU time (ratios stay meaningful on a shared, loaded machine). Counters:
+// `ns` and `aba_ns` are the medians over the batches of ns per call, `x_aba` = ns / aba_ns, and
+// `aba_calls` the ABA calls per step. The Time column is the mean ns per step.
+// Targets (issue 3): symplectic_euler <= 1.2 x ABA, rkmk4 <= 4.5 x ABA; the whole
+// symplectic-Euler Simulator step on fixed_panda <= 1.27 us (MuJoCo 2.2's mj_step, 1.9 us / 1.5).
+//
+//   cd <package> && devel/lib/se3_sim/bench_step [--benchmark_filter=fixed_panda]
 // (scenes from ./config/scenes, or from $SE3_SIM_SCENES)
 #include <benchmark/benchmark.h>
 #include <time.h>
@@ -26,7 +37,8 @@ namespace {
 
 using namespace se3;
 
-const char* kScenes[] = {"satellite_arm", "fixed_arm", "chain20", "pendulum"};
+const char* kScenes[] = {"fixed_panda", "satellite_arm", "fixed_arm", "chain20", "pendulum"};
+constexpr int kBatches = 201;
 
 std::string scene_path(const std::string& name) {
   // Run from the package directory or from anywhere with SE3_SIM_SCENES set.
@@ -35,11 +47,16 @@ std::string scene_path(const std::string& name) {
   return std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/" + name + ".yaml";
 }
 
-// Thread CPU time in ns: ratios stay meaningful on a shared, loaded machine.
 double cpu_ns() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return ts.tv_sec * 1e9 + ts.tv_nsec;
+}
+
+double median(std::vector<double> v) {
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  return v[m];
 }
 
 struct Subject {
@@ -61,41 +78,62 @@ Subject& subject(const std::string& name) {
   return it->second;
 }
 
-// ABA of the scene in ns per call (median of batches), for the ratio.
-double aba_ns(Subject& s) {
-  static std::map<std::string, double> cache;
-  auto it = cache.find(s.scene.name);
-  if (it != cache.end()) return it->second;
-  Data d(s.model);
-  VecX tau = VecX::Zero(s.model.nv);
-  std::vector<double> batches;
-  for (int b = 0; b < 21; ++b) {
+// The scene's ABA at its initial state (own Data, zero torques).
+struct AbaCall {
+  const Subject& s;
+  Data d;
+  VecX tau;
+  explicit AbaCall(const Subject& subj) : s(subj), d(subj.model), tau(VecX::Zero(subj.model.nv)) {}
+  void operator()() {
+    benchmark::DoNotOptimize(aba(s.model, d, s.x0.base, s.x0.q, s.x0.v, tau));
+    benchmark::ClobberMemory();
+  }
+};
+
+// Batch size: about 200 us of ABA calls.
+int batch_size(AbaCall& a) {
+  for (int k = 0; k < 200; ++k) a();
+  const double t0 = cpu_ns();
+  for (int k = 0; k < 200; ++k) a();
+  const double ns = (cpu_ns() - t0) / 200;
+  return std::max(20, static_cast<int>(2e5 / std::max(ns, 1.0)));
+}
+
+// Times step() against the scene's ABA, interleaved batch by batch (see the header).
+template <class F>
+void time_against_aba(benchmark::State& state, const Subject& s, F&& step) {
+  AbaCall a(s);
+  const int k = batch_size(a);
+  for (int i = 0; i < 10; ++i) step();  // warm up
+  std::vector<double> t_step, t_aba;
+  for (auto _ : state) {
     const double t0 = cpu_ns();
-    for (int k = 0; k < 2000; ++k) {
-      benchmark::DoNotOptimize(aba(s.model, d, s.x0.base, s.x0.q, s.x0.v, tau));
+    for (int i = 0; i < k; ++i) {
+      step();
       benchmark::ClobberMemory();
     }
-    batches.push_back((cpu_ns() - t0) / 2000);
+    const double t1 = cpu_ns();
+    for (int i = 0; i < k; ++i) a();
+    const double t2 = cpu_ns();
+    t_step.push_back((t1 - t0) / k);
+    t_aba.push_back((t2 - t1) / k);
+    state.SetIterationTime((t1 - t0) * 1e-9 / k);
   }
-  std::nth_element(batches.begin(), batches.begin() + 10, batches.end());
-  cache[s.scene.name] = batches[10];
-  return batches[10];
+  const double ns = median(t_step), ref = median(t_aba);
+  state.counters["ns"] = ns;
+  state.counters["aba_ns"] = ref;
+  state.counters["x_aba"] = ns / ref;
 }
 
 void BM_Aba(benchmark::State& state, const std::string& name) {
   Subject& s = subject(name);
-  Data d(s.model);
-  VecX tau = VecX::Zero(s.model.nv);
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(aba(s.model, d, s.x0.base, s.x0.q, s.x0.v, tau));
-    benchmark::ClobberMemory();
-  }
+  AbaCall a(s);
+  for (auto _ : state) a();
   state.counters["nv"] = s.model.nv;
 }
 
 void BM_Step(benchmark::State& state, const std::string& name, const std::string& integ) {
   Subject& s = subject(name);
-  const double ref = aba_ns(s);
   StepperOptions opt;
   opt.tol = s.scene.tol;
   opt.friction_eps = s.scene.friction_eps;
@@ -104,40 +142,34 @@ void BM_Step(benchmark::State& state, const std::string& name, const std::string
   const VecX tau = VecX::Zero(s.model.nv);
   const double h = s.scene.dt;
   std::int64_t n = 0, evals = 0;
-  const double t0 = cpu_ns();
-  for (auto _ : state) {
-    const StepInfo info = st->step(x, tau, h);
-    evals += info.evaluations;
+  time_against_aba(state, s, [&] {
+    evals += st->step(x, tau, h).evaluations;
     if ((++n & 1023) == 0) {  // stay near the scene's state (explicit Euler drifts away)
       x.base = s.x0.base;
       x.q = s.x0.q;
       x.v = s.x0.v;
       st->restart();
     }
-    benchmark::ClobberMemory();
-  }
-  const double ns = (cpu_ns() - t0) / std::max<std::int64_t>(n, 1);
-  state.counters["aba_ns"] = ref;
-  state.counters["x_aba"] = ns / ref;
+  });
   state.counters["aba_calls"] = static_cast<double>(evals) / std::max<std::int64_t>(n, 1);
 }
 
-// The Simulator's step: the stepper plus command handling and the divergence guard.
 void BM_SimStep(benchmark::State& state, const std::string& name, const std::string& integ) {
   Subject& s = subject(name);
-  const double ref = aba_ns(s);
   SimConfig cfg;
   cfg.integrator = integ;
   cfg.dt = s.scene.dt;
+  cfg.stepper.tol = s.scene.tol;
+  cfg.stepper.friction_eps = s.scene.friction_eps;
   Simulator sim(s.model, s.x0, cfg);
+  if (!s.scene.constraints.empty()) sim.set_constraints(s.scene.constraints);
   std::int64_t n = 0;
-  const double t0 = cpu_ns();
-  for (auto _ : state) {
-    if (!sim.step() || (++n % 4096) == 0) sim.reset();
-    benchmark::ClobberMemory();
-  }
-  const double ns = (cpu_ns() - t0) / std::max<std::int64_t>(n, 1);
-  state.counters["x_aba"] = ns / ref;
+  time_against_aba(state, s, [&] {
+    // Back to the scene's state now and then, as in step/ (and after a divergence).
+    if (!sim.step() || (++n & 4095) == 0) sim.reset();
+  });
+  state.counters["aba_calls"] =
+      static_cast<double>(sim.evaluations()) / std::max<std::uint64_t>(sim.steps(), 1);
 }
 
 void BM_Rtf(benchmark::State& state, const std::string& name) {
@@ -158,11 +190,15 @@ int register_all() {
     benchmark::RegisterBenchmark(("aba/" + name).c_str(), BM_Aba, name);
     for (const char* integ : {"symplectic_euler", "euler", "rkmk4", "rkmk45"}) {
       benchmark::RegisterBenchmark(("step/" + name + "/" + integ).c_str(), BM_Step, name,
-                                   std::string(integ));
+                                   std::string(integ))
+          ->Iterations(kBatches)
+          ->UseManualTime();
     }
-    for (const char* integ : {"symplectic_euler", "rkmk4"}) {
+    for (const char* integ : {"symplectic_euler", "euler", "rkmk4"}) {
       benchmark::RegisterBenchmark(("sim_step/" + name + "/" + integ).c_str(), BM_SimStep, name,
-                                   std::string(integ));
+                                   std::string(integ))
+          ->Iterations(kBatches)
+          ->UseManualTime();
     }
     benchmark::RegisterBenchmark(("rtf/" + name).c_str(), BM_Rtf, name)
         ->Iterations(1)

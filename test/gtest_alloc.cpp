@@ -11,6 +11,7 @@
 #include <new>
 #include <random>
 
+#include "se3_sim/sim.h"
 #include "test_util.h"
 
 extern "C" {
@@ -195,6 +196,30 @@ TEST(Alloc, RomeoFloating) {
   opt.floating = true;
   check_no_allocation("romeo floating",
                       model_from_urdf_file(se3_test::robot_path("romeo_small.urdf"), opt));
+}
+
+// A whole Simulator step (stepper, passive forces, divergence guard with its energy checks,
+// last-good copies) allocates nothing after the first, for the everyday integrators.
+TEST(Alloc, SimulatorSteps) {
+  UrdfOptions fixed;
+  fixed.locked = {{"panda_finger_joint1", 0.02}, {"panda_finger_joint2", 0.02}};
+  UrdfOptions free = fixed;
+  free.floating = true;
+  for (const UrdfOptions& opt : {fixed, free}) {
+    const Model m = model_from_urdf_file(se3_test::robot_path("panda.urdf"), opt);
+    for (const char* integ : {"symplectic_euler", "euler", "rkmk4", "rkmk45"}) {
+      SCOPED_TRACE(std::string(integ) + (opt.floating ? " free" : " fixed"));
+      SimConfig cfg;
+      cfg.integrator = integ;
+      State x0(m);
+      x0.q.setConstant(0.3);
+      x0.v.setConstant(0.2);
+      Simulator sim(m, x0, cfg);
+      sim.set_joint_effort(1, 2.0);
+      ASSERT_EQ(sim.step_n(3), 3) << sim.failure();
+      EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim.step_n(100), 100) << sim.failure(); }), 0);
+    }
+  }
 }
 
 int main(int argc, char** argv) {

@@ -4,8 +4,11 @@
 // the divergence guard, damping and friction, effort limits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "se3_sim/integrate.h"
 #include "se3_sim/sim.h"
@@ -249,6 +252,45 @@ TEST(Convergence, Rkmk45MeetsItsToleranceAndRejectsSteps) {
   EXPECT_GT(info.rejected, 0);
 }
 
+TEST(State, FiniteMeansEveryNumberFiniteAndTheRotationOrthonormal) {
+  const Model m = make_chain(3, true);
+  const State good = random_state(m, 7);
+  State x = good;
+  x.base.R = exp_so3(Vec3(0.3, -1.2, 2.0));
+  EXPECT_TRUE(x.finite());
+  x.base.R(0, 1) += 1e-9;  // orthonormal to 1e-6
+  EXPECT_TRUE(x.finite());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double bad : {nan, inf, -inf}) {
+    x = good;
+    x.q[2] = bad;
+    EXPECT_FALSE(x.finite()) << "q " << bad;
+    x = good;
+    x.v[8] = bad;
+    EXPECT_FALSE(x.finite()) << "v " << bad;
+    x = good;
+    x.base.p[1] = bad;
+    EXPECT_FALSE(x.finite()) << "p " << bad;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        x = good;
+        x.base.R(r, c) = bad;
+        EXPECT_FALSE(x.finite()) << "R(" << r << ", " << c << ") " << bad;
+      }
+    }
+  }
+  x = good;
+  x.base.R *= 1 + 1e-5;  // not orthonormal
+  EXPECT_FALSE(x.finite());
+  x = good;
+  x.base.R(2, 0) += 1e-5;
+  EXPECT_FALSE(x.finite());
+  x = good;
+  x.q.setConstant(1e300);  // large but finite
+  EXPECT_TRUE(x.finite());
+}
+
 TEST(Guard, DivergenceRollsBackAndReports) {
   Model m = make_chain(8, true);
   m.gravity.setZero();
@@ -285,6 +327,37 @@ TEST(Guard, DivergenceRollsBackAndReports) {
   EXPECT_TRUE(sim.failure().empty());
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(state_err(sim.state(), x0), 0.0);
+}
+
+// The energy check runs every energy_check_every steps; a failed one rolls back to the state
+// of the last check (the states since were never checked), with its time and step count.
+TEST(Guard, EnergyAboveTheLimitRollsBackToTheLastCheckedState) {
+  Model m = make_chain(3, true);
+  m.gravity.setZero();
+  const State x0 = random_state(m, 5);
+  SimConfig cfg;
+  cfg.integrator = "rkmk4";
+  cfg.guard.energy_check_every = 4;
+  Simulator probe(m, x0, cfg);
+  const double T0 = probe.initial_kinetic_energy();
+  const double E_ref = std::max(T0, 0.5 * m.total_mass());  // zero gravity (sim.h)
+  cfg.guard.energy_growth = 1.1 * T0 / E_ref;               // limit: T0 + 10 %
+  Simulator sim(m, x0, cfg);
+  sim.set_joint_effort(1, 2.0);  // pumps energy in
+  std::vector<State> states = {sim.state()};
+  while (sim.step()) states.push_back(sim.state());
+  const std::uint64_t failed_at = states.size();  // the step that failed the check
+  ASSERT_GT(failed_at, 8u);                       // a check passed before
+  ASSERT_LT(failed_at, 1000u);
+  EXPECT_EQ(failed_at % 4, 0u) << "only check steps test the energy";
+  EXPECT_NE(sim.failure().find("kinetic energy"), std::string::npos) << sim.failure();
+  EXPECT_EQ(sim.steps(), failed_at - 4);
+  EXPECT_NEAR(sim.time(), (failed_at - 4) * cfg.dt, 1e-12);
+  EXPECT_EQ(state_err(sim.state(), states[failed_at - 4]), 0.0);
+  EXPECT_LE(sim.kinetic_energy(), 1.1 * T0);
+  // Below the limit all the way: a torque-free run at a limit 10 % above its (kept) energy.
+  Simulator free(m, x0, cfg);
+  EXPECT_EQ(free.step_n(400), 400) << free.failure();
 }
 
 TEST(Guard, StiffDampingWithExplicitEulerIsCaught) {
@@ -341,6 +414,46 @@ TEST(Passive, DampingAndFrictionDissipateEnergy) {
       EXPECT_LT(max_rise, 1e-9) << "energy never rises, variant " << variant;
     }
   }
+}
+
+// The passive forces a stepper applies: damping -d qdot and friction -f tanh(qdot / eps) on
+// exactly the joints that have them, nothing on the base, nothing when switched off; and the
+// acceleration is ABA's under command plus passive forces.
+TEST(Passive, ForcesActOnTheDampedAndRubbingJointsOnly) {
+  Model m = make_chain(4, true);
+  m.damping[1] = 0.5;   // damping only
+  m.friction[2] = 0.3;  // friction only
+  m.damping[3] = 0.2;   // both
+  m.friction[3] = 0.7;  // joint 4: neither
+  const State x = random_state(m, 21);
+  VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < m.nv; ++k) tau[k] = 0.1 * (k + 1);
+  StepperOptions opt;
+  opt.friction_eps = 0.05;
+  auto st = make_stepper("symplectic_euler", m, opt);
+  VecX expected = VecX::Zero(m.nv);
+  for (int i = 1; i <= m.n; ++i) {
+    const double qd = x.v[5 + i];
+    expected[5 + i] = -(m.damping[i] * qd + m.friction[i] * std::tanh(qd / opt.friction_eps));
+  }
+  VecX passive(m.nv);
+  st->passive_forces(x.v, passive);
+  EXPECT_LE((passive - expected).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_EQ(passive.head<6>().norm(), 0.0);
+  EXPECT_EQ(passive[5 + 4], 0.0);  // joint 4
+  EXPECT_NE(passive[5 + 1], 0.0);
+  EXPECT_NE(passive[5 + 2], 0.0);
+  EXPECT_NE(passive[5 + 3], 0.0);
+  Data d(m);
+  const VecX total = tau + passive;
+  const VecX a_ref = aba(m, d, x.base, x.q, x.v, total);
+  EXPECT_LE((st->acceleration(x.base, x.q, x.v, tau) - a_ref).cwiseAbs().maxCoeff(), 1e-12);
+  // Switched off: no passive force, the plain ABA acceleration.
+  opt.passive_forces = false;
+  auto off = make_stepper("symplectic_euler", m, opt);
+  off->passive_forces(x.v, passive);
+  EXPECT_EQ(passive.norm(), 0.0);
+  EXPECT_EQ(off->acceleration(x.base, x.q, x.v, tau), aba(m, d, x.base, x.q, x.v, tau));
 }
 
 TEST(Effort, CommandsAreClampedToTheUrdfLimits) {

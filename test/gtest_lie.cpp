@@ -340,6 +340,33 @@ TEST(Lie, DexpInverse) {
   std::printf("dexp_inv dexp - I: max %.3g\n", worst);
 }
 
+// The matrix-free action (RKMK's hot path) against the matrix, and against the long-double
+// series, on the hard angles and at pi.
+TEST(Lie, DexpInverseTimesEqualsTheMatrix) {
+  std::mt19937_64 rng(16);
+  double worst = 0, worst_ref = 0;
+  std::vector<Vec6> xs = hard_twists(rng);
+  for (int k = 0; k < 20; ++k) {
+    Vec6 xi;
+    xi << M_PI * random_unit(rng), random_vec(rng, 3, 2.0);
+    xs.push_back(xi);
+  }
+  for (const Vec6& xi : xs) {
+    const Vec6 V = random_vec(rng, 6, 1.0);
+    const Vec6 Mv = dexp_inv_se3(xi) * V;
+    const double err = max_abs(dexp_inv_se3_times(xi, V) - Mv) / std::max(1.0, max_abs(Mv));
+    worst = std::max(worst, err);
+    EXPECT_LE(err, 1e-14) << xi.transpose();
+    const Mat6 ref_inv = dexp_reference(xi).cast<long double>().inverse().cast<double>();
+    const Vec6 ref = ref_inv * V;
+    const double err_ref = max_abs(dexp_inv_se3_times(xi, V) - ref) / std::max(1.0, max_abs(ref));
+    worst_ref = std::max(worst_ref, err_ref);
+    EXPECT_LE(err_ref, 1e-13) << xi.transpose();
+  }
+  std::printf("dexp_inv_se3_times vs the matrix: %.3g; vs the long-double series: %.3g\n", worst,
+              worst_ref);
+}
+
 TEST(Lie, SpatialInertiaEq23) {
   std::mt19937_64 rng(14);
   for (int k = 0; k < 200; ++k) {

@@ -110,6 +110,18 @@ class Stepper {
   Data data_;
   VecX tau_;  ///< total generalized force of the current evaluation
   AccelerationHook* hook_ = nullptr;
+
+ private:
+  /// A joint with Coulomb friction: generalized index k, friction f and damping d.
+  struct FrictionJoint {
+    int k;
+    double f, d;
+  };
+  // The passive forces, gathered once from the model (nothing when opt_.passive_forces is off).
+  bool has_passive_ = false;  ///< any damping or friction
+  VecX damping_;              ///< size nv, zero on the base and undamped joints
+  double inv_eps_;            ///< 1 / opt_.friction_eps
+  std::vector<FrictionJoint> friction_;
 };
 
 /// Creates a stepper by name for model. Throws std::invalid_argument naming the known ones.

@@ -88,6 +88,8 @@ Mat6 ad_star(const Vec6& V);
 Mat6 dexp_se3(const Vec6& xi);
 /// Inverse of dexp_se3, in closed form (no matrix inversion).
 Mat6 dexp_inv_se3(const Vec6& xi);
+/// dexp_inv_se3(xi) V without forming the matrix (cross products only; RKMK's hot path).
+Vec6 dexp_inv_se3_times(const Vec6& xi, const Vec6& V);
 
 // ------------------------------------------------- fast matrix-free actions (hot paths)
 /// Ad_f V.

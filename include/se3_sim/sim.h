@@ -80,6 +80,41 @@ State random_state(const Model& model, unsigned seed);
 /// only in code (chain:N), so robot_description can be published.
 std::string model_to_urdf(const Model& model);
 
+/// An upper bound of the kinetic energy that needs no kinematics, for the divergence guard.
+/// Body i's angular speed is at most |w0| plus the revolute joint rates on its path, and its
+/// centre of mass moves at most |v0| + |w0| r + sum over revolute joints j on the path of
+/// |qdot_j| r_j + sum over prismatic ones of |qdot_j|, where r, r_j bound the distances from the
+/// base origin and from joint j to the centre of mass by path lengths through the tree (joint
+/// offsets, prismatic displacements). Then T <= sum_i (m_i |v_ci|^2 + tr(I_i) |w_i|^2) / 2,
+/// I_i the rotational inertia about the body origin (its largest eigenvalue is at most its
+/// trace, and at least that of the inertia about the centre of mass). O(n), allocation-free.
+class KineticEnergyBound {
+ public:
+  explicit KineticEnergyBound(const Model& model);
+  /// >= kinetic_energy(model, data, base, q, v) for every base pose (inf or NaN when q or v
+  /// are not finite).
+  double operator()(const VecX& q, const VecX& v);
+
+ private:
+  struct Body {
+    int parent = -1;
+    int iv = 0;  ///< index of the joint rate in v
+    bool prismatic = false;
+    double offset = 0;  ///< |joint origin| in the parent's frame
+    double com = 0;     ///< |centre of mass| in the body frame
+    double mass = 0;
+    double trace = 0;  ///< trace of the rotational inertia about the body origin
+  };
+  /// Per body, along its path from the base: length L from the base origin to the body origin,
+  /// sums W of |qdot| and P of |qdot| L over the revolute joints, S of |qdot| over the prismatic.
+  struct Path {
+    double L = 0, W = 0, P = 0, S = 0;
+  };
+  bool floating_;
+  std::vector<Body> body_;  ///< index 0 = base
+  std::vector<Path> path_;
+};
+
 struct GuardOptions {
   /// |v| (any component, rad/s or m/s) above this is divergence.
   double max_rate = 1e4;
@@ -170,18 +205,23 @@ class Simulator {
 
  private:
   void refresh_reference();
-  bool check_rates(std::string& why) const;
+  /// The guard's checks (cheap; the reason is found again only after a failure).
+  bool rates_ok() const;
+  bool energy_ok();
+  void roll_back(const StepInfo& info);
 
   std::unique_ptr<Model> model_;
   SimConfig config_;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;
   Data diag_;
+  KineticEnergyBound energy_bound_;
   State initial_, state_, last_good_, last_checked_;
   VecX command_;
-  double time_ = 0, last_good_time_ = 0, last_checked_time_ = 0;
+  double time_ = 0, last_checked_time_ = 0;
   std::uint64_t steps_ = 0, substeps_ = 0, rejected_ = 0, evaluations_ = 0;
-  std::uint64_t last_good_steps_ = 0, last_checked_steps_ = 0;
+  std::uint64_t last_checked_steps_ = 0;
+  int steps_to_energy_check_ = 1;  ///< the energy is checked on the step that takes it to 0
   std::string failure_;
   double T0_ = 0, U0_ = 0, E_ref_ = 1;
 };

@@ -89,53 +89,66 @@ class RkmkStepper final : public Stepper {
   }
 
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
+    if (adaptive()) return adaptive_step(x, tau_cmd, h);
     StepInfo info;
-    if (!adaptive()) {
-      first_stage_known_ = false;
-      attempt(x, tau_cmd, h, trial_, info);
-      x.base = trial_.base;
-      x.q = trial_.q;
-      x.v = trial_.v;
-      info.substeps = 1;
-      return info;
-    }
-    return adaptive_step(x, tau_cmd, h);
+    first_stage_known_ = false;
+    stages(x, tau_cmd, h, info);
+    combine(x, h, x);  // in place: the stages hold all they need of x
+    info.substeps = 1;
+    return info;
   }
 
  private:
-  // One attempt of size h from x into y (y must not alias x). Returns the scaled RMS error
-  // norm (adaptive tableaus; 0 otherwise).
-  double attempt(const State& x, const VecX& tau, double h, State& y, StepInfo& info) {
+  // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when
+  // first_stage_known_).
+  void stages(const State& x, const VecX& tau, double h, StepInfo& info) {
     const bool fl = model_.floating;
     const int n = model_.n;
     for (int i = 0; i < s_; ++i) {
       if (i == 0 && first_stage_known_) continue;
       Vec6 xi = Vec6::Zero();
       VecX& vi = vs_[i];
-      vi = x.v;
-      qi_ = x.q;
+      bool at_x = true;  // no earlier stage enters: the stage point is x itself
       const auto& ai = tab_.a[i];
       for (int j = 0; j < static_cast<int>(ai.size()); ++j) {
         const double c = h * ai[j];
         if (c == 0) continue;
         if (fl) xi.noalias() += c * kxi_[j];
-        qi_.noalias() += c * vs_[j].tail(n);
-        vi.noalias() += c * kv_[j];
+        if (at_x) {
+          qi_.noalias() = x.q + c * vs_[j].tail(n);
+          vi.noalias() = x.v + c * kv_[j];
+          at_x = false;
+        } else {
+          qi_.noalias() += c * vs_[j].tail(n);
+          vi.noalias() += c * kv_[j];
+        }
       }
-      if (fl && i > 0) {
+      if (at_x) {
+        vi = x.v;
+        kv_[i] = acceleration(x.base, x.q, vi, tau);
+        if (fl) kxi_[i] = vi.head<6>();
+      } else if (fl) {
         const SE3 fi = x.base * exp_se3(xi);
         kv_[i] = acceleration(fi, qi_, vi, tau);
-        kxi_[i].noalias() = dexp_inv_se3(-xi) * vi.head<6>();
+        kxi_[i] = dexp_inv_se3_times(-xi, vi.head<6>());
       } else {
         kv_[i] = acceleration(x.base, qi_, vi, tau);
-        if (fl) kxi_[i] = vi.head<6>();
       }
       ++info.evaluations;
     }
-    // Combine.
+  }
+
+  // y = x advanced by h with the weights b of the stages; y may be x itself. Returns the base's
+  // increment xi (y.base = x.base exp(xi)).
+  Vec6 combine(const State& x, double h, State& y) {
+    const bool fl = model_.floating;
+    const int n = model_.n;
+    if (&y != &x) {
+      y.q = x.q;
+      y.v = x.v;
+      y.base = x.base;
+    }
     Vec6 xi = Vec6::Zero();
-    y.q = x.q;
-    y.v = x.v;
     for (int i = 0; i < s_; ++i) {
       const double c = h * tab_.b[i];
       if (c == 0) continue;
@@ -143,11 +156,20 @@ class RkmkStepper final : public Stepper {
       y.q.noalias() += c * vs_[i].tail(n);
       y.v.noalias() += c * kv_[i];
     }
-    y.base = x.base;
     if (fl) {
       y.base = x.base * exp_se3(xi);
       y.base.R = orthonormalize(y.base.R);
     }
+    return xi;
+  }
+
+  // One attempt of size h from x into y (y must not alias x: the error estimate reads both).
+  // Returns the scaled RMS error norm (adaptive tableaus; 0 otherwise).
+  double attempt(const State& x, const VecX& tau, double h, State& y, StepInfo& info) {
+    const bool fl = model_.floating;
+    const int n = model_.n;
+    stages(x, tau, h, info);
+    const Vec6 xi = combine(x, h, y);
     if (tab_.b_err.empty()) return 0;
     // Error estimate of the embedded pair, scaled per component by tol (1 + |y|).
     Vec6 exi = Vec6::Zero();

@@ -11,46 +11,68 @@ namespace se3 {
 
 State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
 
-bool State::finite() const {
-  if (!q.allFinite() || !v.allFinite() || !base.R.allFinite() || !base.p.allFinite()) {
-    return false;
-  }
-  return (base.R.transpose() * base.R - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-6;
-}
-
-Stepper::Stepper(const Model& model, const StepperOptions& opt)
-    : model_(model), opt_(opt), data_(model), tau_(VecX::Zero(model.nv)) {
-  if (!(opt_.friction_eps > 0)) throw std::invalid_argument("friction_eps must be positive");
-}
-
 namespace {
 
-// out += the passive joint forces at rates v: damping -d qdot, friction -f tanh(qdot / eps).
-void add_passive(const Model& model, const StepperOptions& opt, const VecX& v, VecX& out) {
-  if (!opt.passive_forces) return;
-  const int off = model.floating ? 6 : 0;
-  const double inv_eps = 1.0 / opt.friction_eps;
-  for (int i = 1; i <= model.n; ++i) {
-    const double d = model.damping[i], f = model.friction[i];
-    if (d == 0 && f == 0) continue;
-    const double qd = v[off + i - 1];
-    out[off + i - 1] -= f == 0 ? d * qd : d * qd + f * std::tanh(qd * inv_eps);
-  }
+// Whether every entry is finite: x - x is 0 for a finite x and NaN for an inf or a NaN, and a
+// sum with a NaN in it is NaN. Eigen vectorizes the sum (no early exit).
+template <class Derived>
+bool all_finite(const Eigen::MatrixBase<Derived>& x) {
+  return (x - x).sum() == 0;
 }
 
 }  // namespace
 
+bool State::finite() const {
+  // The six distinct entries of R^T R - I; a non-finite R fails here too (inf or NaN on the
+  // diagonal).
+  const Mat3& R = base.R;
+  const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
+                       R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
+                       R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
+  bool ok = all_finite(q) && all_finite(v) && all_finite(base.p);
+  for (double x : e) ok &= std::abs(x) < 1e-6;
+  return ok;
+}
+
+Stepper::Stepper(const Model& model, const StepperOptions& opt)
+    : model_(model),
+      opt_(opt),
+      data_(model),
+      tau_(VecX::Zero(model.nv)),
+      damping_(VecX::Zero(model.nv)),
+      inv_eps_(1.0 / opt.friction_eps) {
+  if (!(opt_.friction_eps > 0)) throw std::invalid_argument("friction_eps must be positive");
+  if (!opt_.passive_forces) return;
+  const int off = model.floating ? 6 : 0;
+  for (int i = 1; i <= model.n; ++i) {
+    const int k = off + i - 1;
+    damping_[k] = model.damping[i];
+    if (model.friction[i] != 0) friction_.push_back({k, model.friction[i], model.damping[i]});
+    has_passive_ = has_passive_ || model.damping[i] != 0 || model.friction[i] != 0;
+  }
+}
+
+// Damping -d qdot on every joint at once (zero where d = 0), then damping and friction
+// -(d qdot + f tanh(qdot / eps)) on the joints with friction.
 void Stepper::passive_forces(const VecX& v, VecX& out) const {
-  out.setZero();
-  add_passive(model_, opt_, v, out);
+  out.noalias() = -damping_.cwiseProduct(v);
+  for (const FrictionJoint& j : friction_) {
+    out[j.k] = -(j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
+  }
 }
 
 const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
                                   const VecX& tau_cmd) {
-  tau_ = tau_cmd;
-  add_passive(model_, opt_, v, tau_);
-  if (hook_) return hook_->acceleration(base, q, v, tau_);
-  return aba(model_, data_, base, q, v, tau_);
+  const VecX* tau = &tau_cmd;
+  if (has_passive_) {  // tau_ = tau_cmd + passive forces, as passive_forces() computes them
+    tau_.noalias() = tau_cmd - damping_.cwiseProduct(v);
+    for (const FrictionJoint& j : friction_) {
+      tau_[j.k] = tau_cmd[j.k] - (j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
+    }
+    tau = &tau_;
+  }
+  if (hook_) return hook_->acceleration(base, q, v, *tau);
+  return aba(model_, data_, base, q, v, *tau);
 }
 
 namespace {

@@ -113,15 +113,21 @@ Mat3 left_jacobian_inv_so3(const Vec3& a) {
   return Mat3::Identity() - 0.5 * A + D * A * A;
 }
 
-// Eqs. (6), (8), (10).
+// Eqs. (6), (8), (10), without 3x3 products: hat(a)^2 = a a^T - t^2 1, so
+// R = (1 - B t^2) 1 + A hat(a) + B a a^T, and p = l + B a x l + C a x (a x l).
 SE3 exp_se3(const Vec6& xi) {
-  const Vec3 a = xi.head<3>();
-  const RodriguesCoeffs k(a.norm());
-  const Mat3 A = hat(a);
-  const Mat3 A2 = A * A;
+  const Vec3 a = xi.head<3>(), l = xi.tail<3>();
+  const double t2 = a.squaredNorm();
+  const RodriguesCoeffs k(std::sqrt(t2));
   SE3 f;
-  f.R = Mat3::Identity() + k.A * A + k.B * A2;
-  f.p = xi.tail<3>() + k.B * (A * xi.tail<3>()) + k.C * (A2 * xi.tail<3>());
+  const Vec3 Ba = k.B * a, Aa = k.A * a;
+  f.R.noalias() = Ba * a.transpose();
+  f.R.diagonal().array() += 1.0 - k.B * t2;
+  f.R(0, 1) -= Aa.z(), f.R(1, 0) += Aa.z();
+  f.R(0, 2) += Aa.y(), f.R(2, 0) -= Aa.y();
+  f.R(1, 2) -= Aa.x(), f.R(2, 1) += Aa.x();
+  const Vec3 al = a.cross(l);
+  f.p = l + k.B * al + k.C * a.cross(al);
   return f;
 }
 
@@ -174,28 +180,46 @@ Mat6 ad_star(const Vec6& V) {
 // Left Jacobian of SE(3) in closed form (angular-first ordering):
 // dexp([a; l]) = [J(a), 0; Q(a, l), J(a)], Q the coupling block of the series sum ad^k/(k+1)!.
 namespace {
-Mat3 dexp_coupling(const Vec3& a, const Vec3& l) {
-  const double t = a.norm();
-  const double t2 = t * t;
+// Q(a, l) = 0.5 L + c1 (AL + LA + ALA) + c2 (AAL + LAA - 3 ALA) + c3 (ALAA + AALA), with
+// A = hat(a), L = hat(l) and these coefficients of t = |a|.
+struct DexpCouplingCoeffs {
   double c1, c2, c3;
-  if (t < kSeries) {
-    // c1 = (t - sin t)/t^3, c2 = (t^2/2 + cos t - 1)/t^4,
-    // c3 = (c2 + 3 (t - sin t - t^3/6)/t^5) / 2 = (2t - 3 sin t + t cos t) / (2 t^5), by their
-    // series (c3 -> 1/120 = 1/5!, the ad^4 coefficient).
-    c1 = 1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0));
-    c2 = 1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0));
-    const double e = -1.0 / 120.0 + t2 * (1.0 / 5040.0 - t2 * (1.0 / 362880.0 - t2 / 39916800.0));
-    c3 = 0.5 * (c2 + 3.0 * e);
-  } else {
-    const double s = std::sin(t), c = std::cos(t);
-    c1 = (t - s) / (t2 * t);
-    c2 = (0.5 * t2 + c - 1.0) / (t2 * t2);
-    c3 = 0.5 * (c2 + 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t));
+  explicit DexpCouplingCoeffs(double t) {
+    const double t2 = t * t;
+    if (t < kSeries) {
+      // c1 = (t - sin t)/t^3, c2 = (t^2/2 + cos t - 1)/t^4,
+      // c3 = (c2 + 3 (t - sin t - t^3/6)/t^5) / 2 = (2t - 3 sin t + t cos t) / (2 t^5), by
+      // their series (c3 -> 1/120 = 1/5!, the ad^4 coefficient).
+      c1 = 1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0));
+      c2 = 1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0));
+      const double e = -1.0 / 120.0 + t2 * (1.0 / 5040.0 - t2 * (1.0 / 362880.0 - t2 / 39916800.0));
+      c3 = 0.5 * (c2 + 3.0 * e);
+    } else {
+      const double s = std::sin(t), c = std::cos(t);
+      c1 = (t - s) / (t2 * t);
+      c2 = (0.5 * t2 + c - 1.0) / (t2 * t2);
+      c3 = 0.5 * (c2 + 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t));
+    }
   }
+};
+
+Mat3 dexp_coupling(const Vec3& a, const Vec3& l) {
+  const DexpCouplingCoeffs k(a.norm());
   const Mat3 A = hat(a), L = hat(l);
   const Mat3 AL = A * L, LA = L * A, ALA = AL * A;
-  return 0.5 * L + c1 * (AL + LA + ALA) + c2 * (A * AL + LA * A - 3.0 * ALA) +
-         c3 * (ALA * A + A * ALA);
+  return 0.5 * L + k.c1 * (AL + LA + ALA) + k.c2 * (A * AL + LA * A - 3.0 * ALA) +
+         k.c3 * (ALA * A + A * ALA);
+}
+
+// Q(a, l) w by cross products (hat(x) y = x cross y), with the terms that start with A
+// gathered: Q w = 0.5 Lw + c1 LAw + c2 LAAw + A (c1 Lw + (c1 - 3 c2) LAw + c3 LAAw)
+//                 + AA (c2 Lw + c3 LAw).
+Vec3 dexp_coupling_times(const DexpCouplingCoeffs& k, const Vec3& a, const Vec3& l, const Vec3& w) {
+  const Vec3 aw = a.cross(w);
+  const Vec3 lw = l.cross(w), law = l.cross(aw), laaw = l.cross(a.cross(aw));
+  const Vec3 u = k.c1 * lw + (k.c1 - 3.0 * k.c2) * law + k.c3 * laaw;
+  const Vec3 uu = k.c2 * lw + k.c3 * law;
+  return 0.5 * lw + k.c1 * law + k.c2 * laaw + a.cross(u + a.cross(uu));
 }
 }  // namespace
 
@@ -217,6 +241,22 @@ Mat6 dexp_inv_se3(const Vec6& xi) {
   m.bottomLeftCorner<3, 3>() = -Ji * dexp_coupling(xi.head<3>(), xi.tail<3>()) * Ji;
   m.bottomRightCorner<3, 3>() = Ji;
   return m;
+}
+
+// [Ji, 0; -Ji Q Ji, Ji] [w; u] = [Ji w; Ji (u - Q Ji w)], Ji w = w - a x w / 2 + D a x (a x w).
+Vec6 dexp_inv_se3_times(const Vec6& xi, const Vec6& V) {
+  const Vec3 a = xi.head<3>();
+  const double t = a.norm();
+  const double D = left_jacobian_inv_coeff(t);
+  const auto Ji = [&](const Vec3& w) -> Vec3 {
+    const Vec3 aw = a.cross(w);
+    return w - 0.5 * aw + D * a.cross(aw);
+  };
+  Vec6 r;
+  r.head<3>() = Ji(V.head<3>());
+  r.tail<3>() =
+      Ji(V.tail<3>() - dexp_coupling_times(DexpCouplingCoeffs(t), a, xi.tail<3>(), r.head<3>()));
+  return r;
 }
 
 // Eq. (23) from the centre of mass: I_O = I_G - m hat(c)^2.

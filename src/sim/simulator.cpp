@@ -8,10 +8,61 @@
 
 namespace se3 {
 
+KineticEnergyBound::KineticEnergyBound(const Model& model)
+    : floating_(model.floating), body_(model.n + 1), path_(model.n + 1) {
+  for (int i = 0; i <= model.n; ++i) {
+    Body& b = body_[i];
+    const Inertia& I = model.inertia[i];
+    b.mass = I.m;
+    b.com = I.m > 0 ? I.h.norm() / I.m : 0.0;
+    b.trace = I.I.trace();
+    if (i == 0) continue;
+    b.parent = model.parent[i];
+    b.iv = model.idx_v(i);
+    b.prismatic = model.joint_type[i] == JointType::Prismatic;
+    b.offset = model.X_tree[i].p.norm();
+  }
+}
+
+double KineticEnergyBound::operator()(const VecX& q, const VecX& v) {
+  double w0 = 0, v0 = 0, T = 0;
+  if (floating_) {
+    w0 = v.head<3>().norm();
+    v0 = v.segment<3>(3).norm();
+    const Body& b = body_[0];
+    const double vc = v0 + w0 * b.com;
+    T = b.mass * vc * vc + b.trace * w0 * w0;
+  }
+  for (size_t i = 1; i < body_.size(); ++i) {
+    const Body& b = body_[i];
+    const Path& up = path_[b.parent];
+    Path& p = path_[i];
+    const double qd = std::abs(v[b.iv]);
+    if (b.prismatic) {
+      p.L = up.L + b.offset + std::abs(q[i - 1]);
+      p.W = up.W;
+      p.P = up.P;
+      p.S = up.S + qd;
+    } else {
+      p.L = up.L + b.offset;
+      p.W = up.W + qd;
+      p.P = up.P + qd * p.L;
+      p.S = up.S;
+    }
+    const double r = p.L + b.com;  // base origin to the centre of mass, at most
+    // sum_j |qdot_j| (r - L_j) over the revolute joints j on the path: r W - P.
+    const double vc = v0 + w0 * r + (r * p.W - p.P) + p.S;
+    const double w = w0 + p.W;
+    T += b.mass * vc * vc + b.trace * w * w;
+  }
+  return 0.5 * T;
+}
+
 Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
     : model_(std::make_unique<Model>(std::move(model))),
       config_(config),
       diag_(*model_),
+      energy_bound_(*model_),
       initial_(initial),
       command_(VecX::Zero(model_->nv)) {
   if (!(config_.dt > 0) || !std::isfinite(config_.dt)) {
@@ -40,8 +91,8 @@ void Simulator::set_state(const State& s) {
   state_.v = s.v;
   last_good_ = state_;
   last_checked_ = state_;
-  last_good_time_ = last_checked_time_ = time_;
-  last_good_steps_ = last_checked_steps_ = steps_;
+  last_checked_time_ = time_;
+  last_checked_steps_ = steps_;
   stepper_->restart();
 }
 
@@ -49,9 +100,10 @@ void Simulator::reset() {
   state_ = initial_;
   last_good_ = initial_;
   last_checked_ = initial_;
-  time_ = last_good_time_ = last_checked_time_ = 0;
+  time_ = last_checked_time_ = 0;
   steps_ = substeps_ = rejected_ = evaluations_ = 0;
-  last_good_steps_ = last_checked_steps_ = 0;
+  last_checked_steps_ = 0;
+  steps_to_energy_check_ = config_.guard.energy_check_every;
   failure_.clear();
   command_.setZero();
   stepper_->restart();
@@ -122,20 +174,24 @@ void Simulator::applied_joint_efforts(VecX& out) {
   }
 }
 
-bool Simulator::check_rates(std::string& why) const {
-  if (!state_.finite()) {
-    why = "non-finite state";
-    return false;
-  }
-  const double vmax = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
-  if (vmax > config_.guard.max_rate) {
-    why = "a rate of " + std::to_string(vmax) + " exceeds the limit " +
-          std::to_string(config_.guard.max_rate);
-    return false;
-  }
-  return true;
+bool Simulator::rates_ok() const {
+  const VecX& v = state_.v;
+  return state_.finite() && (v.size() == 0 || v.cwiseAbs().maxCoeff() <= config_.guard.max_rate);
 }
 
+bool Simulator::energy_ok() {
+  const double limit = config_.guard.energy_growth * E_ref_;
+  // The bound settles the check in practice (with a factor 2 to spare for rounding), and then
+  // the exact energy would pass too; the exact energy (a kinematics pass) only when it does not.
+  const double bound = energy_bound_(state_.q, state_.v);
+  if (std::isfinite(bound) && bound <= 0.5 * limit) return true;
+  const double T = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
+  return std::isfinite(T) && T <= limit;
+}
+
+// The guard (GuardOptions): every step the state must be finite with no rate above max_rate,
+// every energy_check_every-th step since the reset also the kinetic energy below its bound.
+// Invariant between steps: last_good_ is the state, and time and step count are its.
 bool Simulator::step() {
   if (!failure_.empty()) return false;
   const StepInfo info = constraints_ ? constraints_->step(*stepper_, state_, command_, config_.dt)
@@ -143,32 +199,9 @@ bool Simulator::step() {
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;
-  std::string why;
-  bool ok = info.ok;
-  if (!ok) why = info.reason;
-  if (ok) ok = check_rates(why);
-  bool rollback_to_checked = false;
-  if (ok && (steps_ + 1) % config_.guard.energy_check_every == 0) {
-    const double T = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
-    if (!std::isfinite(T) || T > config_.guard.energy_growth * E_ref_) {
-      ok = false;
-      rollback_to_checked = true;
-      why = "kinetic energy " + std::to_string(T) + " J exceeds " +
-            std::to_string(config_.guard.energy_growth) + " x the reference " +
-            std::to_string(E_ref_) + " J";
-    }
-  }
-  if (!ok) {
-    const State& back = rollback_to_checked ? last_checked_ : last_good_;
-    state_.base = back.base;
-    state_.q = back.q;
-    state_.v = back.v;
-    time_ = rollback_to_checked ? last_checked_time_ : last_good_time_;
-    steps_ = rollback_to_checked ? last_checked_steps_ : last_good_steps_;
-    failure_ = "diverged at t = " + std::to_string(time_ + config_.dt) + " s with " +
-               stepper_->name() + ", dt = " + std::to_string(config_.dt) + ": " + why +
-               "; state rolled back to t = " + std::to_string(time_) + " s";
-    stepper_->restart();
+  const bool energy_step = steps_to_energy_check_ == 1;
+  if (!(info.ok && rates_ok() && (!energy_step || energy_ok()))) {
+    roll_back(info);
     return false;
   }
   ++steps_;
@@ -176,16 +209,50 @@ bool Simulator::step() {
   last_good_.base = state_.base;
   last_good_.q = state_.q;
   last_good_.v = state_.v;
-  last_good_time_ = time_;
-  last_good_steps_ = steps_;
-  if (steps_ % config_.guard.energy_check_every == 0) {
+  if (energy_step) {
     last_checked_.base = state_.base;
     last_checked_.q = state_.q;
     last_checked_.v = state_.v;
     last_checked_time_ = time_;
     last_checked_steps_ = steps_;
+    steps_to_energy_check_ = config_.guard.energy_check_every;
+  } else {
+    --steps_to_energy_check_;
   }
   return true;
+}
+
+// A failed step: says why, and goes back to the last good state (the one before the step), or
+// to the last checked one when the energy check failed (the states since are suspect).
+void Simulator::roll_back(const StepInfo& info) {
+  std::string why;
+  bool to_checked = false;
+  if (!info.ok) {
+    why = info.reason;
+  } else if (!state_.finite()) {
+    why = "non-finite state";
+  } else if (!rates_ok()) {
+    why = "a rate of " + std::to_string(state_.v.cwiseAbs().maxCoeff()) + " exceeds the limit " +
+          std::to_string(config_.guard.max_rate);
+  } else {
+    const double T = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
+    to_checked = true;
+    why = "kinetic energy " + std::to_string(T) + " J exceeds " +
+          std::to_string(config_.guard.energy_growth) + " x the reference " +
+          std::to_string(E_ref_) + " J";
+  }
+  const State& back = to_checked ? last_checked_ : last_good_;
+  state_.base = back.base;
+  state_.q = back.q;
+  state_.v = back.v;
+  if (to_checked) {
+    time_ = last_checked_time_;
+    steps_ = last_checked_steps_;
+  }
+  failure_ = "diverged at t = " + std::to_string(time_ + config_.dt) + " s with " +
+             stepper_->name() + ", dt = " + std::to_string(config_.dt) + ": " + why +
+             "; state rolled back to t = " + std::to_string(time_) + " s";
+  stepper_->restart();
 }
 
 int Simulator::step_n(int k) {
