@@ -70,7 +70,8 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
                  const VecX& a, const Vec6* f_ext_base = nullptr);
 
 /// Articulated-body algorithm, eqs. (38)-(43). Returns ddq (nv), with dV0/dt first for a free
-/// base. f_ext_base: wrench applied on the base (base frame, about its origin).
+/// base. f_ext_base: wrench applied on the base (base frame, about its origin). The result
+/// depends on the base pose only through its rotation (gravity's direction in the base frame).
 const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
                 const VecX& tau, const Vec6* f_ext_base = nullptr);
 

@@ -11,7 +11,7 @@
 // (Ia S = U - U D / D = 0), so for a revolute joint its blocks [A B; B^T C] have A's third
 // row and column and B's third row zero: the transform into the parent's frame works on the
 // 15 entries left.
-#include <Eigen/Cholesky>
+#include <cmath>
 
 #include "joint.h"
 #include "se3_sim/dynamics.h"
@@ -157,6 +157,37 @@ inline void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6
   }
 }
 
+// Solves IA x = b for a symmetric positive definite IA given by its upper triangle, by Cholesky
+// IA = L L^T (the free base's 6x6 system of eq. 42). A matrix that is not positive definite
+// gives NaN, which the simulator's divergence guard reports.
+inline Vec6 solve_spd6(const Mat6& IA, const Vec6& b) {
+  double L[6][6];
+  for (int j = 0; j < 6; ++j) {
+    double d = up(IA, j, j);
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    const double inv = 1.0 / std::sqrt(d);
+    L[j][j] = 1.0 / inv;
+    for (int i = j + 1; i < 6; ++i) {
+      double x = up(IA, j, i);  // IA(i, j)
+      for (int k = 0; k < j; ++k) x -= L[i][k] * L[j][k];
+      L[i][j] = x * inv;
+    }
+  }
+  double y[6];
+  for (int i = 0; i < 6; ++i) {  // L y = b
+    double x = b[i];
+    for (int k = 0; k < i; ++k) x -= L[i][k] * y[k];
+    y[i] = x / L[i][i];
+  }
+  Vec6 out;
+  for (int i = 5; i >= 0; --i) {  // L^T out = y
+    double x = y[i];
+    for (int k = i + 1; k < 6; ++k) x -= L[k][i] * out[k];
+    out[i] = x / L[i][i];
+  }
+  return out;
+}
+
 // J as a 6x6 (eq. 23), upper triangle: [I h^; -h^ m 1].
 inline void set_inertia_upper(const Inertia& J, Mat6& out) {
   for (int c = 0; c < 3; ++c) {
@@ -239,7 +270,7 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
   ag << 0, 0, 0, -(base.R.transpose() * model.gravity);
   if (model.floating) {
     // IA_0 a_0 = -pA_0 in the gravity-free frame; the true dV0/dt adds g back.
-    data.A[0] = -(data.IA[0].selfadjointView<Eigen::Upper>().llt().solve(data.F[0]));
+    data.A[0] = -solve_spd6(data.IA[0], data.F[0]);
     data.ddq.head<6>() = data.A[0] - ag;
   } else {
     data.A[0] = ag;

@@ -7,6 +7,7 @@
 // the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "se3_sim/integrate.h"
@@ -43,6 +44,26 @@ ButcherTableau tableau_dormand_prince45() {
 
 namespace {
 
+// y += c x over n entries, two at a time in an SSE2 register (vectors here have a few to a few
+// hundred entries: no setup beyond the loop).
+typedef double v2d __attribute__((vector_size(16)));
+inline void axpy(int n, double c, const double* __restrict x, double* __restrict y) {
+  int k = 0;
+  for (; k + 2 <= n; k += 2) {
+    v2d a, b;
+    std::memcpy(&a, x + k, sizeof a);
+    std::memcpy(&b, y + k, sizeof b);
+    b += c * a;
+    std::memcpy(y + k, &b, sizeof b);
+  }
+  if (k < n) y[k] += c * x[k];
+}
+
+// y = x over n entries (a plain loop: std::copy calls memmove, costly for a dozen doubles).
+inline void copy(int n, const double* __restrict x, double* __restrict y) {
+  for (int k = 0; k < n; ++k) y[k] = x[k];
+}
+
 class RkmkStepper final : public Stepper {
  public:
   RkmkStepper(const ButcherTableau& tab, const Model& model, const StepperOptions& opt)
@@ -66,6 +87,10 @@ class RkmkStepper final : public Stepper {
           throw std::invalid_argument("tableau '" + tab_.name + "' is not first-same-as-last");
         }
       }
+    }
+    if (s_ > kMaxStages) {
+      throw std::invalid_argument("tableau '" + tab_.name + "': more than " +
+                                  std::to_string(kMaxStages) + " stages");
     }
     if (adaptive() && !(opt_.tol > 0)) throw std::invalid_argument("tol must be positive");
     kxi_.assign(s_, Vec6::Zero());
@@ -100,65 +125,104 @@ class RkmkStepper final : public Stepper {
 
  private:
   // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when
-  // first_stage_known_).
+  // first_stage_known_). The stage sums are plain loops over the few non-zero a_ij (Eigen's
+  // expressions on vectors of a dozen entries cost more in setup than in arithmetic).
   void stages(const State& x, const VecX& tau, double h, StepInfo& info) {
     const bool fl = model_.floating;
-    const int n = model_.n;
+    const int n = model_.n, nv = model_.nv, off = nv - n;
     for (int i = 0; i < s_; ++i) {
       if (i == 0 && first_stage_known_) continue;
-      Vec6 xi = Vec6::Zero();
-      VecX& vi = vs_[i];
-      bool at_x = true;  // no earlier stage enters: the stage point is x itself
       const auto& ai = tab_.a[i];
+      double c[kMaxStages];
+      const double* kv[kMaxStages];
+      const double* qd[kMaxStages];
+      int terms = 0;
+      Vec6 xi = Vec6::Zero();
       for (int j = 0; j < static_cast<int>(ai.size()); ++j) {
-        const double c = h * ai[j];
-        if (c == 0) continue;
-        if (fl) xi.noalias() += c * kxi_[j];
-        if (at_x) {
-          qi_.noalias() = x.q + c * vs_[j].tail(n);
-          vi.noalias() = x.v + c * kv_[j];
-          at_x = false;
-        } else {
-          qi_.noalias() += c * vs_[j].tail(n);
-          vi.noalias() += c * kv_[j];
-        }
+        if (ai[j] == 0) continue;
+        c[terms] = h * ai[j];
+        kv[terms] = kv_[j].data();
+        qd[terms] = vs_[j].data() + off;
+        if (fl) xi.noalias() += c[terms] * kxi_[j];
+        ++terms;
       }
-      if (at_x) {
-        vi = x.v;
-        kv_[i] = acceleration(x.base, x.q, vi, tau);
-        if (fl) kxi_[i] = vi.head<6>();
-      } else if (fl) {
-        const SE3 fi = x.base * exp_se3(xi);
-        kv_[i] = acceleration(fi, qi_, vi, tau);
-        kxi_[i] = dexp_inv_se3_times(-xi, vi.head<6>());
+      double* vi = vs_[i].data();
+      const double* xv = x.v.data();
+      if (terms == 0) {  // the stage point is x itself
+        copy(nv, xv, vi);
+        stage_acceleration(i, x.base, x.q, vs_[i], tau);
+        if (fl) kxi_[i] = vs_[i].head<6>();
+        ++info.evaluations;
+        continue;
+      }
+      double* qi = qi_.data();
+      const double* xq = x.q.data();
+      copy(nv, xv, vi);
+      copy(n, xq, qi);
+      for (int t = 0; t < terms; ++t) {
+        axpy(nv, c[t], kv[t], vi);
+        axpy(n, c[t], qd[t], qi);
+      }
+      if (fl) {
+        stage_acceleration(i, stage_pose(x.base, xi), qi_, vs_[i], tau);
+        kxi_[i] = dexp_inv_se3_times(-xi, vs_[i].head<6>());
       } else {
-        kv_[i] = acceleration(x.base, qi_, vi, tau);
+        stage_acceleration(i, x.base, qi_, vs_[i], tau);
       }
       ++info.evaluations;
     }
+  }
+
+  // kv_[i] = the acceleration at a stage point (ABA's output vector is swapped in, not copied).
+  void stage_acceleration(int i, const SE3& base, const VecX& q, const VecX& v, const VecX& tau) {
+    const VecX& a = acceleration(base, q, v, tau);
+    if (&a == &data_.ddq) {
+      kv_[i].swap(data_.ddq);
+    } else {
+      copy(model_.nv, a.data(), kv_[i].data());
+    }
+  }
+
+  // The base pose at a stage, x.base exp(xi). Without a constraint hook only ABA sees it, and
+  // ABA depends on the base pose only through its rotation (the direction of gravity in the base
+  // frame, dynamics.h): then the position is left as it is, and with zero gravity the pose too.
+  SE3 stage_pose(const SE3& base, const Vec6& xi) const {
+    if (acceleration_hook()) return base * exp_se3(xi);
+    if (model_.gravity.isZero(0.0)) return base;
+    return SE3(base.R * exp_so3(xi.head<3>()), base.p);
   }
 
   // y = x advanced by h with the weights b of the stages; y may be x itself. Returns the base's
   // increment xi (y.base = x.base exp(xi)).
   Vec6 combine(const State& x, double h, State& y) {
     const bool fl = model_.floating;
-    const int n = model_.n;
-    if (&y != &x) {
-      y.q = x.q;
-      y.v = x.v;
-      y.base = x.base;
-    }
+    const int n = model_.n, nv = model_.nv, off = nv - n;
+    double c[kMaxStages];
+    const double* kv[kMaxStages];
+    const double* qd[kMaxStages];
+    int terms = 0;
     Vec6 xi = Vec6::Zero();
     for (int i = 0; i < s_; ++i) {
-      const double c = h * tab_.b[i];
-      if (c == 0) continue;
-      if (fl) xi.noalias() += c * kxi_[i];
-      y.q.noalias() += c * vs_[i].tail(n);
-      y.v.noalias() += c * kv_[i];
+      if (tab_.b[i] == 0) continue;
+      c[terms] = h * tab_.b[i];
+      kv[terms] = kv_[i].data();
+      qd[terms] = vs_[i].data() + off;
+      if (fl) xi.noalias() += c[terms] * kxi_[i];
+      ++terms;
+    }
+    if (&y != &x) {
+      copy(nv, x.v.data(), y.v.data());
+      copy(n, x.q.data(), y.q.data());
+    }
+    for (int t = 0; t < terms; ++t) {
+      axpy(nv, c[t], kv[t], y.v.data());
+      axpy(n, c[t], qd[t], y.q.data());
     }
     if (fl) {
       y.base = x.base * exp_se3(xi);
       y.base.R = orthonormalize(y.base.R);
+    } else if (&y != &x) {
+      y.base = x.base;
     }
     return xi;
   }
@@ -289,6 +353,7 @@ class RkmkStepper final : public Stepper {
     return info;
   }
 
+  static constexpr int kMaxStages = 16;
   ButcherTableau tab_;
   int s_;
   std::vector<Vec6> kxi_;
