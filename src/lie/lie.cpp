@@ -273,20 +273,18 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
 // Expressed in the frame where the body sits at f: x' = R x + p. With hat(a) hat(b) =
 // b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
 // (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
-// symmetric result needs only its upper triangle. A hot path of crba, minv and aba.
+// symmetric result needs only its upper triangle. Column by column, each 3-vector as an (x, y)
+// pair and a z: Z = R I, then I' = Z R^T; the result is written (add = false) or added (add = true)
+// to `out` entry by entry, scalar stores only, so that no wide load has to wait on them. A hot path
+// of crba and minv.
 namespace {
+
 typedef double v2d __attribute__((vector_size(16)));  // SSE2 pair (GCC/Clang vector extension)
 inline v2d load2(const double* p) {
   v2d r;
   std::memcpy(&r, p, sizeof r);
   return r;
 }
-}  // namespace
-
-// Column by column, each 3-vector as an (x, y) pair and a z: Z = R I, then I' = Z R^T; the
-// result is written (add = false) or added (add = true) to `out` entry by entry, scalar stores
-// only, so that no wide load has to wait on them.
-namespace {
 
 template <bool add>
 void transform_inertia(const Inertia& in, const SE3& f, Inertia& out) {
