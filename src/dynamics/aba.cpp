@@ -27,6 +27,38 @@ inline double up(const Mat6& m, int r, int c) {
   return m.data()[r + 6 * c];
 }
 
+// out (upper triangle) += Ia's blocks after the rotation, A' (upper), B' and C' (both triangles),
+// moved by the shift of eq. (38)'s Ad*: with P = hat(p), A'' = A' + M + M^T - N P, B'' = B' + N,
+// C'' = C', where N = P C' and M = P B'^T (N P is symmetric).
+inline void add_shifted(const Vec3& p, const double (&Ap)[3][3], const double (&Bp)[3][3],
+                        const double (&Cp)[3][3], Mat6& out) {
+  const double px = p[0], py = p[1], pz = p[2];
+  double N[3][3], M[3][3];
+#pragma GCC unroll 3
+  for (int j = 0; j < 3; ++j) {  // N(:, j) = p x C'(:, j); M(:, j) = p x B'(j, :)
+    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
+    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
+    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
+    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
+    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
+    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
+  }
+  double* o = out.data();
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
+                         px * N[i][1] - py * N[i][0]};  // -(N P)(i, :)
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {
+      if (j >= i) {
+        o[i + 6 * j] += Ap[i][j] + M[i][j] + M[j][i] + q[j];
+        o[3 + i + 6 * (3 + j)] += Cp[i][j];
+      }
+      o[i + 6 * (3 + j)] += Bp[i][j] + N[i][j];
+    }
+  }
+}
+
 // The inward step of a revolute body i (eqs. 38, 40, 41), on the upper triangle of its
 // articulated inertia IA: Ia = IA - U U^T / D, whose row and column 2 vanish, and
 // pa = pA + Ia c + U u / D; then adds Ad*_{f^-1} Ia Ad_{f^-1} to the parent's IA (upper
@@ -89,32 +121,7 @@ inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double 
       }
     }
   }
-  // The shift.
-  const double px = f.p[0], py = f.p[1], pz = f.p[2];
-  double N[3][3], M[3][3];
-#pragma GCC unroll 3
-  for (int j = 0; j < 3; ++j) {  // N(:, j) = p x C'(:, j); M(:, j) = p x B'(j, :)
-    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
-    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
-    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
-    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
-    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
-    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
-  }
-  double* o = IAp.data();
-#pragma GCC unroll 3
-  for (int i = 0; i < 3; ++i) {
-    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
-                         px * N[i][1] - py * N[i][0]};  // -(N P)(i, :)
-#pragma GCC unroll 3
-    for (int j = 0; j < 3; ++j) {
-      if (j >= i) {
-        o[i + 6 * j] += Ap[i][j] + M[i][j] + M[j][i] + q[j];
-        o[3 + i + 6 * (3 + j)] += Cp[i][j];
-      }
-      o[i + 6 * (3 + j)] += Bp[i][j] + N[i][j];
-    }
-  }
+  add_shifted(f.p, Ap, Bp, Cp, IAp);
   return pa;
 }
 
@@ -138,23 +145,7 @@ inline void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6
       Ap[i][j] = a, Bp[i][j] = b, Cp[i][j] = cc;
     }
   }
-  const double px = f.p[0], py = f.p[1], pz = f.p[2];
-  double N[3][3], M[3][3];
-  for (int j = 0; j < 3; ++j) {
-    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
-    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
-    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
-    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
-    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
-    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
-  }
-  for (int i = 0; i < 3; ++i) {
-    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
-                         px * N[i][1] - py * N[i][0]};
-    for (int j = i; j < 3; ++j) up(out, i, j) += Ap[i][j] + M[i][j] + M[j][i] + q[j];
-    for (int j = 0; j < 3; ++j) up(out, i, 3 + j) += Bp[i][j] + N[i][j];
-    for (int j = i; j < 3; ++j) up(out, 3 + i, 3 + j) += Cp[i][j];
-  }
+  add_shifted(f.p, Ap, Bp, Cp, out);
 }
 
 // Solves IA x = b for a symmetric positive definite IA given by its upper triangle, by Cholesky

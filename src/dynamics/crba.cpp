@@ -132,18 +132,12 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
       for (int r = 0; r < 3; ++r) Ip.h[r] += Ic.h[r];
       for (int r = 0; r < 9; ++r) Ip.I.data()[r] += Ic.I.data()[r];
     }
-    // F = Ic S_i: (I w + h x v, m v - h x w) for S_i = (w, v).
+    // F = Ic S_i.
     const int col = off + i - 1;
-    const double w0 = J[0][col], w1 = J[1][col], w2 = J[2][col];
-    const double v0 = J[3][col], v1 = J[4][col], v2 = J[5][col];
-    const double* I = Ic.I.data();
-    const double hx = Ic.h[0], hy = Ic.h[1], hz = Ic.h[2], m = Ic.m;
-    const double F0 = I[0] * w0 + I[3] * w1 + I[6] * w2 + (hy * v2 - hz * v1);
-    const double F1 = I[1] * w0 + I[4] * w1 + I[7] * w2 + (hz * v0 - hx * v2);
-    const double F2 = I[2] * w0 + I[5] * w1 + I[8] * w2 + (hx * v1 - hy * v0);
-    const double F3 = m * v0 - (hy * w2 - hz * w1);
-    const double F4 = m * v1 - (hz * w0 - hx * w2);
-    const double F5 = m * v2 - (hx * w1 - hy * w0);
+    const double S[6] = {J[0][col], J[1][col], J[2][col], J[3][col], J[4][col], J[5][col]};
+    double Fv[6];
+    detail::inertia_times(Ic, S, Fv);
+    const double F0 = Fv[0], F1 = Fv[1], F2 = Fv[2], F3 = Fv[3], F4 = Fv[4], F5 = Fv[5];
     // D(j, i) = S_j . F for every ancestor j of i (and j = i), written to both triangles.
     // Ancestors come in runs of consecutive indices (a chain is a single run); column i above
     // the diagonal is contiguous in column-major storage.

@@ -4,24 +4,12 @@
 #pragma once
 
 #include <cmath>
-#include <cstring>
 
+#include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
 namespace detail {
-
-/// Two doubles in one SSE2 register (GCC/Clang vector extension: plain SSE2, no -march needed).
-typedef double v2d __attribute__((vector_size(16)));
-
-inline v2d load2(const double* p) {
-  v2d r;
-  std::memcpy(&r, p, sizeof r);
-  return r;
-}
-inline void store2(double* p, v2d x) {
-  std::memcpy(p, &x, sizeof x);
-}
 
 /// Index of the non-zero entry of S in a 6-vector: 2 (revolute) or 5 (prismatic).
 inline int axis_index(JointType t) {
@@ -90,24 +78,30 @@ inline void add_force(const SE3& f, const double* in, double* out) {
   out[3] += g[0], out[4] += g[1], out[5] += g[2];
 }
 
-/// out = -ad*_V (J V) = V x* (J V), the velocity-product (bias) wrench of eqs. (24), (39), with
-/// J V = (I w + h x v, m v - h x w) (eq. 23).
-inline void bias_force(const Inertia& J, const double* V, double* out) {
+/// out = J V for a twist V (eq. 23): (I w + h x v, m v - h x w).
+inline void inertia_times(const Inertia& J, const double* V, double* out) {
   const double w0 = V[0], w1 = V[1], w2 = V[2], v0 = V[3], v1 = V[4], v2 = V[5];
   const double hx = J.h[0], hy = J.h[1], hz = J.h[2], m = J.m;
   const double* I = J.I.data();
-  const double n0 = I[0] * w0 + I[3] * w1 + I[6] * w2 + (hy * v2 - hz * v1);
-  const double n1 = I[1] * w0 + I[4] * w1 + I[7] * w2 + (hz * v0 - hx * v2);
-  const double n2 = I[2] * w0 + I[5] * w1 + I[8] * w2 + (hx * v1 - hy * v0);
-  const double f0 = m * v0 - (hy * w2 - hz * w1);
-  const double f1 = m * v1 - (hz * w0 - hx * w2);
-  const double f2 = m * v2 - (hx * w1 - hy * w0);
-  out[0] = (w1 * n2 - w2 * n1) + (v1 * f2 - v2 * f1);
-  out[1] = (w2 * n0 - w0 * n2) + (v2 * f0 - v0 * f2);
-  out[2] = (w0 * n1 - w1 * n0) + (v0 * f1 - v1 * f0);
-  out[3] = w1 * f2 - w2 * f1;
-  out[4] = w2 * f0 - w0 * f2;
-  out[5] = w0 * f1 - w1 * f0;
+  out[0] = I[0] * w0 + I[3] * w1 + I[6] * w2 + (hy * v2 - hz * v1);
+  out[1] = I[1] * w0 + I[4] * w1 + I[7] * w2 + (hz * v0 - hx * v2);
+  out[2] = I[2] * w0 + I[5] * w1 + I[8] * w2 + (hx * v1 - hy * v0);
+  out[3] = m * v0 - (hy * w2 - hz * w1);
+  out[4] = m * v1 - (hz * w0 - hx * w2);
+  out[5] = m * v2 - (hx * w1 - hy * w0);
+}
+
+/// out = -ad*_V (J V) = V x* (J V), the velocity-product (bias) wrench of eqs. (24), (39).
+inline void bias_force(const Inertia& J, const double* V, double* out) {
+  double G[6];
+  inertia_times(J, V, G);
+  const double w0 = V[0], w1 = V[1], w2 = V[2], v0 = V[3], v1 = V[4], v2 = V[5];
+  out[0] = (w1 * G[2] - w2 * G[1]) + (v1 * G[5] - v2 * G[4]);
+  out[1] = (w2 * G[0] - w0 * G[2]) + (v2 * G[3] - v0 * G[5]);
+  out[2] = (w0 * G[1] - w1 * G[0]) + (v0 * G[4] - v1 * G[3]);
+  out[3] = w1 * G[5] - w2 * G[4];
+  out[4] = w2 * G[3] - w0 * G[5];
+  out[5] = w0 * G[4] - w1 * G[3];
 }
 
 /// V x (S qd), eq. (34) gamma = -ad_{S w}(V) = ad_V(S w).

@@ -41,6 +41,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "lie/simd.h"
+
 // The error-free transformations (Fast2Sum, Veltkamp split) must not be contracted into FMAs
 // if this file is ever built for a CPU that has them.
 #if defined(__clang__)
@@ -53,7 +55,9 @@ namespace se3 {
 namespace detail {
 namespace {
 
-typedef double v2d __attribute__((vector_size(16)));
+using detail::load2;
+using detail::store2;
+using detail::v2d;
 typedef long long v2i __attribute__((vector_size(16)));
 
 struct alignas(16) Consts {
@@ -97,16 +101,6 @@ inline const Consts& consts() {
   const Consts* k = &kConsts;
   asm("" : "+r"(k));
   return *k;
-}
-
-inline v2d load2(const double* p) {
-  v2d v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-inline void store2(double* p, v2d v) {
-  std::memcpy(p, &v, sizeof v);
 }
 
 /// Bit i set where lane i has |x| <= B (not for NaN).

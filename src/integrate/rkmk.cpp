@@ -10,6 +10,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "lie/simd.h"
 #include "se3_sim/integrate.h"
 
 namespace se3 {
@@ -46,16 +47,9 @@ namespace {
 
 // y += c x over n entries, two at a time in an SSE2 register (vectors here have a few to a few
 // hundred entries: no setup beyond the loop).
-typedef double v2d __attribute__((vector_size(16)));
 inline void axpy(int n, double c, const double* __restrict x, double* __restrict y) {
   int k = 0;
-  for (; k + 2 <= n; k += 2) {
-    v2d a, b;
-    std::memcpy(&a, x + k, sizeof a);
-    std::memcpy(&b, y + k, sizeof b);
-    b += c * a;
-    std::memcpy(y + k, &b, sizeof b);
-  }
+  for (; k + 2 <= n; k += 2) detail::store2(y + k, detail::load2(y + k) + c * detail::load2(x + k));
   if (k < n) y[k] += c * x[k];
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "simd.h"
+
 namespace se3 {
 namespace {
 
@@ -279,12 +281,8 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
 // of crba and minv.
 namespace {
 
-typedef double v2d __attribute__((vector_size(16)));  // SSE2 pair (GCC/Clang vector extension)
-inline v2d load2(const double* p) {
-  v2d r;
-  std::memcpy(&r, p, sizeof r);
-  return r;
-}
+using detail::load2;
+using detail::v2d;
 
 template <bool add>
 void transform_inertia(const Inertia& in, const SE3& f, Inertia& out) {
