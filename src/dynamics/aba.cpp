@@ -67,8 +67,7 @@ inline void add_shifted(const Vec3& p, const double (&Ap)[3][3], const double (&
 // Ia = [A B; B^T C] has A = [a00 a01 0; a01 a11 0; 0 0 0] and B's row 2 zero. The rotation:
 // A' = R A R^T = u r0^T + w r1^T (r_k the columns of R, u = a00 r0 + a01 r1,
 // w = a01 r0 + a11 r1), B' = R B R^T = r0 (R b0)^T + r1 (R b1)^T (b_k the rows of B),
-// C' = R C R^T. The shift by P = hat(p): A'' = A' + M + M^T - N P, B'' = B' + N, C'' = C',
-// N = P C', M = P B'^T (N P is symmetric).
+// C' = R C R^T; then the shift (add_shifted).
 inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
                             const Vec6& pA, const Vec6& c, Mat6& IAp) {
   const double* m = IA.data();  // m[r + 6 c], r <= c

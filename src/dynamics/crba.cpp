@@ -20,21 +20,6 @@ using detail::v2d;
 
 namespace {
 
-// x <- Ad*_{f^-1} x for the wrench columns x = (n0, n1, n2, f0, f1, f2) (eq. 19: (R n + p x R f,
-// R f)); T is double or v2d (two columns at once).
-template <class T>
-inline void force_to_parent(const double* R, const double* p, T (&x)[6]) {
-  T f[3], n[3];
-  for (int r = 0; r < 3; ++r) {
-    f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
-    n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];
-  }
-  x[0] = n[0] + (p[1] * f[2] - p[2] * f[1]);
-  x[1] = n[1] + (p[2] * f[0] - p[0] * f[2]);
-  x[2] = n[2] + (p[0] * f[1] - p[1] * f[0]);
-  x[3] = f[0], x[4] = f[1], x[5] = f[2];
-}
-
 const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
   const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
@@ -74,13 +59,13 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     for (; c + 2 <= end; c += 2) {
       v2d x[6];
       for (int r = 0; r < 6; ++r) x[r] = load2(F[r] + c);
-      force_to_parent(R, t, x);
+      detail::force_to_parent(R, t, x);
       for (int r = 0; r < 6; ++r) store2(F[r] + c, x[r]);
     }
     if (c < end) {
       double x[6];
       for (int r = 0; r < 6; ++r) x[r] = F[r][c];
-      force_to_parent(R, t, x);
+      detail::force_to_parent(R, t, x);
       for (int r = 0; r < 6; ++r) F[r][c] = x[r];
     }
   }

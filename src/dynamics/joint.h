@@ -35,15 +35,6 @@ inline void prismatic_transform(const SE3& Xt, double q, SE3& out) {
   out.p = Xt.p + q * Xt.R.col(2);
 }
 
-/// X_tree * exp(S q): the parent-from-body displacement f_{i,j} = KK_j exp(S_j q_j).
-inline void joint_transform(const SE3& Xt, JointType t, double q, SE3& out) {
-  if (t == JointType::Revolute) {
-    revolute_transform(Xt, std::cos(q), std::sin(q), out);
-  } else {
-    prismatic_transform(Xt, q, out);
-  }
-}
-
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
 /// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
 void joint_transforms(const Model& model, Data& data, const VecX& q);
@@ -63,19 +54,26 @@ inline void inv_motion(const SE3& f, const double* in, double* out) {
   }
 }
 
+/// x <- Ad*_{f^-1} x for wrenches x = (n0, n1, n2, f0, f1, f2) given by R, p of f (eq. 19:
+/// (R n + p x R f, R f)); T is double, or v2d for two wrenches at once.
+template <class T>
+inline void force_to_parent(const double* R, const double* p, T (&x)[6]) {
+  T f[3], n[3];
+  for (int r = 0; r < 3; ++r) {
+    f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
+    n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];
+  }
+  x[0] = n[0] + (p[1] * f[2] - p[2] * f[1]);
+  x[1] = n[1] + (p[2] * f[0] - p[0] * f[2]);
+  x[2] = n[2] + (p[0] * f[1] - p[1] * f[0]);
+  x[3] = f[0], x[4] = f[1], x[5] = f[2];
+}
+
 /// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f).
 inline void add_force(const SE3& f, const double* in, double* out) {
-  const double* R = f.R.data();
-  double g[3];
-  for (int r = 0; r < 3; ++r) {
-    g[r] = R[r] * in[3] + R[r + 3] * in[4] + R[r + 6] * in[5];
-    out[r] += R[r] * in[0] + R[r + 3] * in[1] + R[r + 6] * in[2];
-  }
-  const double px = f.p[0], py = f.p[1], pz = f.p[2];
-  out[0] += py * g[2] - pz * g[1];
-  out[1] += pz * g[0] - px * g[2];
-  out[2] += px * g[1] - py * g[0];
-  out[3] += g[0], out[4] += g[1], out[5] += g[2];
+  double x[6] = {in[0], in[1], in[2], in[3], in[4], in[5]};
+  force_to_parent(f.R.data(), f.p.data(), x);
+  for (int r = 0; r < 6; ++r) out[r] += x[r];
 }
 
 /// out = J V for a twist V (eq. 23): (I w + h x v, m v - h x w).
@@ -102,17 +100,6 @@ inline void bias_force(const Inertia& J, const double* V, double* out) {
   out[3] = w1 * G[5] - w2 * G[4];
   out[4] = w2 * G[3] - w0 * G[5];
   out[5] = w0 * G[4] - w1 * G[3];
-}
-
-/// V x (S qd), eq. (34) gamma = -ad_{S w}(V) = ad_V(S w).
-inline Vec6 cross_axis(JointType t, const Vec6& V, double qd) {
-  Vec6 r;
-  if (t == JointType::Revolute) {
-    r << qd * V(1), -qd * V(0), 0, qd * V(4), -qd * V(3), 0;
-  } else {
-    r << 0, 0, 0, qd * V(1), -qd * V(0), 0;
-  }
-  return r;
 }
 
 }  // namespace detail

@@ -1,4 +1,4 @@
-// Batched sine and cosine of joint angles for the dynamics hot paths (joint_transform needs
+// Batched sine and cosine of joint angles for the dynamics hot paths (joint_transforms needs
 // cos q_i and sin q_i of every joint first). Two lanes at a time with SSE2, no FMA needed.
 #pragma once
 

@@ -65,10 +65,8 @@ const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
                                   const VecX& tau_cmd) {
   const VecX* tau = &tau_cmd;
   if (has_passive_) {  // tau_ = tau_cmd + passive forces, as passive_forces() computes them
-    tau_.noalias() = tau_cmd - damping_.cwiseProduct(v);
-    for (const FrictionJoint& j : friction_) {
-      tau_[j.k] = tau_cmd[j.k] - (j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
-    }
+    passive_forces(v, tau_);
+    tau_ += tau_cmd;
     tau = &tau_;
   }
   if (hook_) return hook_->acceleration(base, q, v, *tau);
