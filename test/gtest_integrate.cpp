@@ -221,6 +221,91 @@ TEST(Convergence, Rkmk4IsFourthOrderAndSymplecticEulerFirstOrder) {
   }
 }
 
+// rkmk4's step (each stage's slope fed into the running sum and the next stage point at once)
+// against RKMK4 written out here stage by stage: the same numbers up to rounding, on a fixed base
+// (plain RK4 on q and v) and on a free base (with dexp_inv by its series, as RKMK4 uses it), with
+// damping and friction in play.
+TEST(Rkmk4, StepEqualsRkmk4WrittenOutStageByStage) {
+  for (const bool floating : {false, true}) {
+    Model m = make_chain(5, floating, {2.0, 1.0, 0.5});
+    for (int i = 1; i <= m.n; ++i) {
+      m.damping[i] = 0.1 * i;
+      m.friction[i] = i % 2 ? 0.05 : 0.0;
+    }
+    const State x0 = random_state(m, 11);
+    VecX tau = VecX::Zero(m.nv);
+    for (int k = 0; k < m.nv; ++k) tau[k] = 0.1 * std::sin(k + 1.0);
+    const double h = 0.01;
+    auto st = make_stepper("rkmk4", m);
+    State x = x0;
+    ASSERT_TRUE(st->step(x, tau, h).ok);
+
+    // By hand: stage points, slopes, then the b-weighted sum.
+    auto probe = make_stepper("rkmk4", m);  // only for its acceleration() (ABA + passive forces)
+    const int n = m.n;
+    const double c[4] = {0, 0.5, 0.5, 1}, b[4] = {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6};
+    VecX kv[4], kq[4];
+    Vec6 kxi[4], xi = Vec6::Zero();
+    VecX q = x0.q, v = x0.v;
+    for (int i = 0; i < 4; ++i) {
+      if (i > 0) {
+        q = x0.q + c[i] * h * kq[i - 1];
+        v = x0.v + c[i] * h * kv[i - 1];
+        xi = c[i] * h * kxi[i - 1];
+      }
+      const SE3 f = floating ? x0.base * exp_se3(xi) : x0.base;
+      kv[i] = probe->acceleration(f, q, v, tau);
+      kq[i] = v.tail(n);
+      if (floating) kxi[i] = dexp_inv_se3_times_series(-xi, v.head<6>());
+    }
+    VecX q1 = x0.q, v1 = x0.v;
+    Vec6 xi1 = Vec6::Zero();
+    for (int i = 0; i < 4; ++i) {
+      q1 += h * b[i] * kq[i];
+      v1 += h * b[i] * kv[i];
+      if (floating) xi1 += h * b[i] * kxi[i];
+    }
+    const SE3 f1 = x0.base * exp_se3(xi1);
+    EXPECT_LE((x.q - q1).cwiseAbs().maxCoeff(), 1e-14) << floating;
+    EXPECT_LE((x.v - v1).cwiseAbs().maxCoeff(), 1e-13) << floating;
+    EXPECT_LE((x.base.R - f1.R).cwiseAbs().maxCoeff(), 1e-15) << floating;
+    EXPECT_LE((x.base.p - f1.p).cwiseAbs().maxCoeff(), 1e-15) << floating;
+    // Not vacuous: the step moved everything it integrates.
+    EXPECT_GT((x.v - x0.v).norm(), 1e-3);
+    if (floating) {
+      EXPECT_GT(xi1.norm(), 1e-3);
+    }
+  }
+}
+
+// A tableau whose stages read more than the previous stage (Kutta's 3/8 rule) takes the general
+// RKMK path; it too is fourth order on a free-floating chain.
+TEST(Convergence, ThreeEighthsRuleThroughTheGeneralTableauPathIsFourthOrder) {
+  Model m = make_chain(3, true, {3.0, 1.0});
+  m.gravity.setZero();
+  const State x0 = random_state(m, 3);
+  ButcherTableau t;
+  t.name = "rkmk38";
+  t.order = 4;
+  t.a = {{}, {1.0 / 3}, {-1.0 / 3, 1.0}, {1.0, -1.0, 1.0}};
+  t.b = {1.0 / 8, 3.0 / 8, 3.0 / 8, 1.0 / 8};
+  const auto run38 = [&](double h) {
+    auto st = make_rkmk_stepper(t, m, {});
+    State x = x0;
+    for (int k = 0; k < static_cast<int>(std::llround(1.0 / h)); ++k) {
+      EXPECT_TRUE(st->step(x, VecX::Zero(m.nv), h).ok);
+    }
+    return x;
+  };
+  const State ref = run(m, "rkmk4", x0, 1.0 / 2560, 1.0);
+  const double e1 = state_err(run38(1.0 / 40), ref);
+  const double e2 = state_err(run38(1.0 / 80), ref);
+  const double e3 = state_err(run38(1.0 / 160), ref);
+  EXPECT_GT(e1, 1e-9);
+  EXPECT_NEAR(e1 / e2, 16.0, 3.0) << e1 << " " << e2;
+  EXPECT_NEAR(e2 / e3, 16.0, 2.0) << e2 << " " << e3;
+}
+
 TEST(Convergence, Rkmk45MeetsItsToleranceAndRejectsSteps) {
   Model m = make_chain(4, true);
   m.gravity.setZero();

@@ -367,6 +367,57 @@ TEST(Lie, DexpInverseTimesEqualsTheMatrix) {
               worst_ref);
 }
 
+// The series cut after ad^2 (RKMK4's dexp_inv) against the closed form: the gap shrinks like
+// |xi|^4 (halving xi divides it by 16: the ad^3 term is zero), so it could not hide a wrong sign
+// or coefficient in either term kept (those would leave |xi| or |xi|^2 gaps).
+TEST(Lie, DexpInverseSeriesIsWithinXiToTheFourthOfTheClosedForm) {
+  std::mt19937_64 rng(21);
+  for (int k = 0; k < 20; ++k) {
+    const Vec6 dir = random_vec(rng, 6, 1.0);
+    const Vec6 V = random_vec(rng, 6, 1.0);
+    double prev = 0;
+    for (const double s : {0.2, 0.1, 0.05, 0.025}) {
+      const Vec6 xi = s * dir;
+      const double gap = max_abs(dexp_inv_se3_times_series(xi, V) - dexp_inv_se3_times(xi, V));
+      EXPECT_LE(gap, 0.01 * std::pow(s * dir.norm(), 4) * V.norm()) << s;
+      if (prev > 0) {
+        EXPECT_NEAR(prev / gap, 16.0, 1.5) << s << " " << dir.transpose();
+      }
+      prev = gap;
+    }
+  }
+  // Exact at xi = 0 and for V along xi (all brackets vanish).
+  const Vec6 V = random_vec(rng, 6, 1.0);
+  EXPECT_EQ(dexp_inv_se3_times_series(Vec6::Zero(), V), V);
+  EXPECT_LE(max_abs(dexp_inv_se3_times_series(0.3 * V, V) - V), 1e-16);
+}
+
+// One Newton-Schulz step squares the distance to a rotation and lands on the closest one (the
+// polar factor U V^T of the singular value decomposition).
+TEST(Lie, ReorthonormalizeSquaresTheOrthonormalityError) {
+  std::mt19937_64 rng(22);
+  for (int k = 0; k < 20; ++k) {
+    const Mat3 R = random_pose(rng).R;
+    for (const double e : {1e-4, 1e-6, 1e-8}) {
+      Mat3 P = R;
+      for (int i = 0; i < 9; ++i) P.data()[i] += e * random_vec(rng, 1, 1.0)[0];
+      const double before = max_abs(P.transpose() * P - Mat3::Identity());
+      const Mat3 O = reorthonormalize(P);
+      const double after = max_abs(O.transpose() * O - Mat3::Identity());
+      EXPECT_GT(before, 0.1 * e);
+      EXPECT_LE(after, 3 * before * before + 1e-15) << e;
+      const Eigen::JacobiSVD<Mat3> svd(P, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Mat3 polar = svd.matrixU() * svd.matrixV().transpose();
+      EXPECT_LE(max_abs(O - polar), 3 * before * before + 1e-15) << e;
+    }
+  }
+  // A rotation that is orthonormal to rounding stays so, step after step (no drift).
+  Mat3 R = exp_so3(Vec3(0.3, -0.2, 0.9));
+  const Mat3 step = exp_so3(Vec3(1e-3, 2e-3, -1e-3));
+  for (int k = 0; k < 100000; ++k) R = reorthonormalize(R * step);
+  EXPECT_LE(max_abs(R.transpose() * R - Mat3::Identity()), 1e-15);
+}
+
 TEST(Lie, SpatialInertiaEq23) {
   std::mt19937_64 rng(14);
   for (int k = 0; k < 200; ++k) {

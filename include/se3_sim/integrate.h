@@ -112,10 +112,10 @@ class Stepper {
   AccelerationHook* hook_ = nullptr;
 
  private:
-  /// A joint with Coulomb friction: generalized index k, friction f and damping d.
+  /// A joint with Coulomb friction: generalized index k and friction f.
   struct FrictionJoint {
     int k;
-    double f, d;
+    double f;
   };
   // The passive forces, gathered once from the model (nothing when opt_.passive_forces is off).
   bool has_passive_ = false;  ///< any damping or friction

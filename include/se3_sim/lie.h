@@ -90,6 +90,10 @@ Mat6 dexp_se3(const Vec6& xi);
 Mat6 dexp_inv_se3(const Vec6& xi);
 /// dexp_inv_se3(xi) V without forming the matrix (cross products only; RKMK's hot path).
 Vec6 dexp_inv_se3_times(const Vec6& xi, const Vec6& V);
+/// The series of dexp_inv_se3(xi) V cut after its ad^2 term, V - [xi, V] / 2 + [xi, [xi, V]] / 12:
+/// within O(|xi|^4 |V|) of dexp_inv_se3_times, since the ad^3 coefficient (B_3 / 3!) is zero.
+/// Defined after cross_motion below.
+inline Vec6 dexp_inv_se3_times_series(const Vec6& xi, const Vec6& V);
 
 // ------------------------------------------------- fast matrix-free actions (hot paths)
 /// Ad_f V.
@@ -126,6 +130,10 @@ inline Vec6 cross_motion(const Vec6& V, const Vec6& U) {
   r.head<3>() = V.head<3>().cross(U.head<3>());
   r.tail<3>() = V.tail<3>().cross(U.head<3>()) + V.head<3>().cross(U.tail<3>());
   return r;
+}
+inline Vec6 dexp_inv_se3_times_series(const Vec6& xi, const Vec6& V) {
+  const Vec6 b = cross_motion(xi, V);
+  return V - 0.5 * b + (1.0 / 12.0) * cross_motion(xi, b);
 }
 /// -ad*_V F = -ad_V^T F (Featherstone's v x* f), eq. (22) with the sign folded in.
 inline Vec6 cross_force(const Vec6& V, const Vec6& F) {
@@ -187,6 +195,10 @@ Vec6 newton_euler_wrench(const Mat6& J, const Vec6& V, const Vec6& Vdot);
 
 /// Closest rotation to m (for renormalization after many products).
 Mat3 orthonormalize(const Mat3& m);
+/// One Newton-Schulz step toward the closest rotation, R (3 1 - R^T R) / 2: for R orthonormal to
+/// e (|R^T R - 1| <= e) the result is orthonormal to O(e^2) plus rounding. For a pose kept
+/// orthonormal step after step (f exp(xi) is off by a few ulp); orthonormalize() otherwise.
+Mat3 reorthonormalize(const Mat3& R);
 /// Rotation from a unit quaternion (x, y, z, w), ROS order.
 Mat3 rotation_from_quaternion(double x, double y, double z, double w);
 /// Unit quaternion (x, y, z, w) of a rotation, w >= 0.

@@ -4,7 +4,8 @@
 //   xi_i = h sum_j a_ij Kxi_j,  q_i = q + h sum_j a_ij qdot_j,  v_i = v + h sum_j a_ij a_j
 //   f_i  = f exp(xi_i),         a_i = ABA(f_i, q_i, v_i),       Kxi_i = dexp_inv(-xi_i) V0_i
 // and the step ends at f exp(h sum_i b_i Kxi_i) with q and v combined by b. The joint part is
-// the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot.
+// the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot,
+// taken from its series for methods of order <= 4 (see series_dexp_).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -45,20 +46,15 @@ ButcherTableau tableau_dormand_prince45() {
 
 namespace {
 
-// y += c x over n entries, two at a time in an SSE2 register (vectors here have a few to a few
-// hundred entries: no setup beyond the loop).
-inline void axpy(int n, double c, const double* __restrict x, double* __restrict y) {
-  int k = 0;
-  for (; k + 2 <= n; k += 2) detail::store2(y + k, detail::load2(y + k) + c * detail::load2(x + k));
-  if (k < n) y[k] += c * x[k];
-}
-
-// y = x over n entries (a plain loop: std::copy calls memmove, costly for a dozen doubles).
-inline void copy(int n, const double* __restrict x, double* __restrict y) {
-  for (int k = 0; k < n; ++k) y[k] = x[k];
-}
+using detail::copy;
 
 class RkmkStepper final : public Stepper {
+  static constexpr int kMaxStages = 16;
+  struct Term {  // a tableau entry: stage j, coefficient a
+    int j;
+    double a;
+  };
+
  public:
   RkmkStepper(const ButcherTableau& tab, const Model& model, const StepperOptions& opt)
       : Stepper(model, opt), tab_(tab), s_(static_cast<int>(tab.b.size())) {
@@ -82,11 +78,29 @@ class RkmkStepper final : public Stepper {
         }
       }
     }
+    if (adaptive() && !(opt_.tol > 0)) throw std::invalid_argument("tol must be positive");
+    rows_.resize(s_);
+    for (int i = 0; i < s_; ++i) {
+      for (int j = 0; j < static_cast<int>(tab_.a[i].size()); ++j) {
+        if (tab_.a[i][j] != 0) rows_[i].push_back({j, tab_.a[i][j]});
+      }
+      if (tab_.b[i] != 0) weights_.push_back({i, tab_.b[i]});
+    }
+    if (weights_.empty()) throw std::invalid_argument("tableau '" + tab_.name + "': b is zero");
     if (s_ > kMaxStages) {
       throw std::invalid_argument("tableau '" + tab_.name + "': more than " +
                                   std::to_string(kMaxStages) + " stages");
     }
-    if (adaptive() && !(opt_.tol > 0)) throw std::invalid_argument("tol must be positive");
+    series_dexp_ = tab_.order <= 4;
+    chain_ = !adaptive();
+    chain_c_.assign(s_, 0.0);
+    for (int i = 1; i < s_; ++i) {
+      const auto& ai = tab_.a[i];
+      for (int j = 0; j + 1 < static_cast<int>(ai.size()); ++j) chain_ = chain_ && ai[j] == 0;
+      if (static_cast<int>(ai.size()) == i) chain_c_[i] = ai[i - 1];
+    }
+    vbuf_[0] = vbuf_[1] = sum_v_ = VecX::Zero(model.nv);
+    sum_q_ = VecX::Zero(model.n);
     kxi_.assign(s_, Vec6::Zero());
     kv_.assign(s_, VecX::Zero(model.nv));
     vs_.assign(s_, VecX::Zero(model.nv));
@@ -109,6 +123,7 @@ class RkmkStepper final : public Stepper {
 
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
     if (adaptive()) return adaptive_step(x, tau_cmd, h);
+    if (chain_) return step_chain(x, tau_cmd, h);
     StepInfo info;
     first_stage_known_ = false;
     stages(x, tau_cmd, h, info);
@@ -118,53 +133,131 @@ class RkmkStepper final : public Stepper {
   }
 
  private:
-  // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when
-  // first_stage_known_). The stage sums are plain loops over the few non-zero a_ij (Eigen's
-  // expressions on vectors of a dozen entries cost more in setup than in arithmetic).
-  void stages(const State& x, const VecX& tau, double h, StepInfo& info) {
+  // A fixed step of a tableau whose stage i reads only stage i - 1 (classical RK4): each stage's
+  // slope goes into the b-weighted sum and into the next stage point in one pass and is then
+  // dropped, so no stage is stored and no combination pass is left at the end.
+  StepInfo step_chain(State& x, const VecX& tau, double h) {
     const bool fl = model_.floating;
     const int n = model_.n, nv = model_.nv, off = nv - n;
+    const double *xv = x.v.data(), *xq = x.q.data();
+    double *sv = sum_v_.data(), *sq = sum_q_.data();
+    const VecX *vi = &x.v, *qi = &x.q;  // the stage point's rates and positions
+    Vec6 xi = Vec6::Zero(), sum_xi = Vec6::Zero();
+    SE3 fi;  // the stage's base pose (free base)
+    for (int i = 0;; ++i) {
+      if (i > 0 && fl) fi = stage_pose(x.base, xi);
+      const double* a = acceleration(i > 0 && fl ? fi : x.base, *qi, *vi, tau).data();
+      const double* w = vi->data() + off;  // the stage's joint rates, qdot
+      Vec6 kxi;
+      if (fl) {
+        kxi = i == 0 ? vi->head<6>()
+                     : (series_dexp_ ? dexp_inv_se3_times_series(-xi, vi->head<6>())
+                                     : dexp_inv_se3_times(-xi, vi->head<6>()));
+      }
+      const double b = h * tab_.b[i];
+      if (i + 1 == s_) {  // x += sum + b slope (q first: with one stage, w is x's own rates)
+        add_sum(n, b, w, sq, i > 0, x.q.data());
+        add_sum(nv, b, a, sv, i > 0, x.v.data());
+        if (fl) {
+          x.base = x.base * exp_se3(sum_xi + b * kxi);
+          x.base.R = reorthonormalize(x.base.R);
+        }
+        break;
+      }
+      const double c = h * chain_c_[i + 1];
+      VecX& vn = vbuf_[i & 1];  // not *vi: that is x.v or the other buffer
+      feed(n, w, b, sq, i > 0, c, xq, qi_.data());
+      feed(nv, a, b, sv, i > 0, c, xv, vn.data());
+      if (fl) {
+        sum_xi += b * kxi;
+        xi = c * kxi;
+      }
+      vi = &vn;
+      qi = &qi_;
+    }
+    StepInfo info;
+    info.evaluations = s_;
+    info.substeps = 1;
+    return info;
+  }
+
+  // sum = (add ? sum : 0) + b z and next = x + c z, in one pass over z.
+  static void feed(int n, const double* z, double b, double* sum, bool add, double c,
+                   const double* x, double* next) {
+    using detail::load2;
+    using detail::store2;
+    int k = 0;
+    if (add) {
+      for (; k + 2 <= n; k += 2) {
+        const detail::v2d zk = load2(z + k);
+        store2(sum + k, load2(sum + k) + b * zk);
+        store2(next + k, load2(x + k) + c * zk);
+      }
+      if (k < n) sum[k] += b * z[k];
+    } else {
+      for (; k + 2 <= n; k += 2) {
+        const detail::v2d zk = load2(z + k);
+        store2(sum + k, b * zk);
+        store2(next + k, load2(x + k) + c * zk);
+      }
+      if (k < n) sum[k] = b * z[k];
+    }
+    if (k < n) next[k] = x[k] + c * z[k];
+  }
+
+  // y += (add ? sum : 0) + b z.
+  static void add_sum(int n, double b, const double* z, const double* sum, bool add, double* y) {
+    if (!add) return detail::axpy(n, b, z, y);
+    int k = 0;
+    for (; k + 2 <= n; k += 2) {
+      detail::store2(y + k,
+                     detail::load2(y + k) + (detail::load2(sum + k) + b * detail::load2(z + k)));
+    }
+    if (k < n) y[k] += sum[k] + b * z[k];
+  }
+
+  // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when
+  // first_stage_known_).
+  void stages(const State& x, const VecX& tau, double h, StepInfo& info) {
+    const bool fl = model_.floating;
     for (int i = 0; i < s_; ++i) {
       if (i == 0 && first_stage_known_) continue;
-      const auto& ai = tab_.a[i];
-      double c[kMaxStages];
-      const double* kv[kMaxStages];
-      const double* qd[kMaxStages];
-      int terms = 0;
-      Vec6 xi = Vec6::Zero();
-      for (int j = 0; j < static_cast<int>(ai.size()); ++j) {
-        if (ai[j] == 0) continue;
-        c[terms] = h * ai[j];
-        kv[terms] = kv_[j].data();
-        qd[terms] = vs_[j].data() + off;
-        if (fl) xi.noalias() += c[terms] * kxi_[j];
-        ++terms;
-      }
-      double* vi = vs_[i].data();
-      const double* xv = x.v.data();
-      if (terms == 0) {  // the stage point is x itself
-        copy(nv, xv, vi);
+      ++info.evaluations;
+      if (rows_[i].empty()) {  // the stage point is x itself
+        copy(model_.nv, x.v.data(), vs_[i].data());
         stage_acceleration(i, x.base, x.q, vs_[i], tau);
         if (fl) kxi_[i] = vs_[i].head<6>();
-        ++info.evaluations;
         continue;
       }
-      double* qi = qi_.data();
-      const double* xq = x.q.data();
-      copy(nv, xv, vi);
-      copy(n, xq, qi);
-      for (int t = 0; t < terms; ++t) {
-        axpy(nv, c[t], kv[t], vi);
-        axpy(n, c[t], qd[t], qi);
-      }
-      if (fl) {
-        stage_acceleration(i, stage_pose(x.base, xi), qi_, vs_[i], tau);
-        kxi_[i] = dexp_inv_se3_times(-xi, vs_[i].head<6>());
-      } else {
+      const Vec6 xi = advance(x, rows_[i], h, vs_[i].data(), qi_.data());
+      if (!fl) {
         stage_acceleration(i, x.base, qi_, vs_[i], tau);
+        continue;
       }
-      ++info.evaluations;
+      stage_acceleration(i, stage_pose(x.base, xi), qi_, vs_[i], tau);
+      kxi_[i] = series_dexp_ ? dexp_inv_se3_times_series(-xi, vs_[i].head<6>())
+                             : dexp_inv_se3_times(-xi, vs_[i].head<6>());
     }
+  }
+
+  // v = x.v + h sum_t a_t kv_[j_t] and q = x.q + h sum_t a_t qdot_[j_t] over the terms (one pass
+  // over each vector); returns the base's xi = h sum_t a_t kxi_[j_t]. v and q may be x's own.
+  Vec6 advance(const State& x, const std::vector<Term>& terms, double h, double* v, double* q) {
+    const int n = model_.n, nv = model_.nv, off = nv - n;
+    const int T = static_cast<int>(terms.size());
+    double c[kMaxStages];
+    const double* a[kMaxStages];
+    const double* qd[kMaxStages];
+    Vec6 xi = Vec6::Zero();
+    for (int t = 0; t < T; ++t) {
+      c[t] = h * terms[t].a;
+      a[t] = kv_[terms[t].j].data();
+      qd[t] = vs_[terms[t].j].data() + off;
+      if (model_.floating) xi += c[t] * kxi_[terms[t].j];
+    }
+    detail::add_terms(nv, x.v.data(), T, c, a, v);
+    detail::add_terms(n, x.q.data(), T, c, qd, q);
+    return xi;
   }
 
   // kv_[i] = the acceleration at a stage point (ABA's output vector is swapped in, not copied).
@@ -186,38 +279,16 @@ class RkmkStepper final : public Stepper {
     return SE3(base.R * exp_so3(xi.head<3>()), base.p);
   }
 
-  // y = x advanced by h with the weights b of the stages; y may be x itself. Returns the base's
-  // increment xi (y.base = x.base exp(xi)).
+  // y = x advanced by h with the weights b of the stages; y may be x itself (the stages keep
+  // their own copy of the rates). Returns the base's increment xi (y.base = x.base exp(xi)).
   Vec6 combine(const State& x, double h, State& y) {
-    const bool fl = model_.floating;
-    const int n = model_.n, nv = model_.nv, off = nv - n;
-    double c[kMaxStages];
-    const double* kv[kMaxStages];
-    const double* qd[kMaxStages];
-    int terms = 0;
-    Vec6 xi = Vec6::Zero();
-    for (int i = 0; i < s_; ++i) {
-      if (tab_.b[i] == 0) continue;
-      c[terms] = h * tab_.b[i];
-      kv[terms] = kv_[i].data();
-      qd[terms] = vs_[i].data() + off;
-      if (fl) xi.noalias() += c[terms] * kxi_[i];
-      ++terms;
+    const Vec6 xi = advance(x, weights_, h, y.v.data(), y.q.data());
+    if (!model_.floating) {
+      if (&y != &x) y.base = x.base;
+      return xi;
     }
-    if (&y != &x) {
-      copy(nv, x.v.data(), y.v.data());
-      copy(n, x.q.data(), y.q.data());
-    }
-    for (int t = 0; t < terms; ++t) {
-      axpy(nv, c[t], kv[t], y.v.data());
-      axpy(n, c[t], qd[t], y.q.data());
-    }
-    if (fl) {
-      y.base = x.base * exp_se3(xi);
-      y.base.R = orthonormalize(y.base.R);
-    } else if (&y != &x) {
-      y.base = x.base;
-    }
+    y.base = x.base * exp_se3(xi);
+    y.base.R = reorthonormalize(y.base.R);
     return xi;
   }
 
@@ -347,9 +418,21 @@ class RkmkStepper final : public Stepper {
     return info;
   }
 
-  static constexpr int kMaxStages = 16;
   ButcherTableau tab_;
   int s_;
+  // The non-zero entries of the tableau: a_ij of stage i (rows_[i]), and b_i (weights_, j = i).
+  std::vector<std::vector<Term>> rows_;
+  std::vector<Term> weights_;
+  // dexp_inv by its series through ad^2 (lie.h) for methods of order <= 4, the closed form above.
+  // Munthe-Kaas (1999): an RKMK method of order p keeps its order with the series cut after
+  // ad^(p-1); the cut changes the increment's slope by O(|xi|^(p-1)), which the integral over a
+  // step of size h (xi = O(h)) turns into O(h^(p+1)), the method's local error. The ad^3 term is
+  // zero, so through ad^2 is through ad^3: order 4.
+  bool series_dexp_ = false;
+  // step_chain: whether the tableau qualifies, its a_{i,i-1}, and its workspace.
+  bool chain_ = false;
+  std::vector<double> chain_c_;
+  VecX vbuf_[2], sum_v_, sum_q_;
   std::vector<Vec6> kxi_;
   std::vector<VecX> kv_, vs_;
   VecX qi_, err_q_, err_v_;

@@ -5,22 +5,12 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "lie/simd.h"
 #include "se3_sim/integrate.h"
 
 namespace se3 {
 
 State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
-
-namespace {
-
-// Whether every entry is finite: x - x is 0 for a finite x and NaN for an inf or a NaN, and a
-// sum with a NaN in it is NaN. Eigen vectorizes the sum (no early exit).
-template <class Derived>
-bool all_finite(const Eigen::MatrixBase<Derived>& x) {
-  return (x - x).sum() == 0;
-}
-
-}  // namespace
 
 bool State::finite() const {
   // The six distinct entries of R^T R - I; a non-finite R fails here too (inf or NaN on the
@@ -29,7 +19,9 @@ bool State::finite() const {
   const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
                        R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
                        R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
-  bool ok = all_finite(q) && all_finite(v) && all_finite(base.p);
+  bool ok = detail::all_finite(static_cast<int>(q.size()), q.data()) &&
+            detail::all_finite(static_cast<int>(v.size()), v.data()) &&
+            detail::all_finite(3, base.p.data());
   for (double x : e) ok &= std::abs(x) < 1e-6;
   return ok;
 }
@@ -47,26 +39,44 @@ Stepper::Stepper(const Model& model, const StepperOptions& opt)
   for (int i = 1; i <= model.n; ++i) {
     const int k = off + i - 1;
     damping_[k] = model.damping[i];
-    if (model.friction[i] != 0) friction_.push_back({k, model.friction[i], model.damping[i]});
+    if (model.friction[i] != 0) friction_.push_back({k, model.friction[i]});
     has_passive_ = has_passive_ || model.damping[i] != 0 || model.friction[i] != 0;
   }
 }
 
-// Damping -d qdot on every joint at once (zero where d = 0), then damping and friction
-// -(d qdot + f tanh(qdot / eps)) on the joints with friction.
-void Stepper::passive_forces(const VecX& v, VecX& out) const {
-  out.noalias() = -damping_.cwiseProduct(v);
-  for (const FrictionJoint& j : friction_) {
-    out[j.k] = -(j.d * v[j.k] + j.f * std::tanh(v[j.k] * inv_eps_));
+namespace {
+
+// o = base - d qdot - f tanh(qdot / eps) over nv entries: damping on every joint at once (d = 0 on
+// the base and the undamped joints), then friction on the joints that have it (list fr of {k, f}).
+// base may be null (zero). File-local, so that it is inlined into the time step.
+template <class FrictionList>
+void add_passive(int nv, const double* base, const double* d, const double* w,
+                 const FrictionList& fr, double inv_eps, double* o) {
+  int k = 0;
+  if (base) {
+    for (; k + 2 <= nv; k += 2) {
+      detail::store2(o + k, detail::load2(base + k) - detail::load2(d + k) * detail::load2(w + k));
+    }
+    if (k < nv) o[k] = base[k] - d[k] * w[k];
+  } else {
+    for (; k < nv; ++k) o[k] = -d[k] * w[k];
   }
+  for (const auto& j : fr) o[j.k] -= j.f * std::tanh(w[j.k] * inv_eps);
+}
+
+}  // namespace
+
+void Stepper::passive_forces(const VecX& v, VecX& out) const {
+  out.resize(model_.nv);
+  add_passive(model_.nv, nullptr, damping_.data(), v.data(), friction_, inv_eps_, out.data());
 }
 
 const VecX& Stepper::acceleration(const SE3& base, const VecX& q, const VecX& v,
                                   const VecX& tau_cmd) {
   const VecX* tau = &tau_cmd;
-  if (has_passive_) {  // tau_ = tau_cmd + passive forces, as passive_forces() computes them
-    passive_forces(v, tau_);
-    tau_ += tau_cmd;
+  if (has_passive_) {  // tau_ = tau_cmd + passive forces
+    add_passive(model_.nv, tau_cmd.data(), damping_.data(), v.data(), friction_, inv_eps_,
+                tau_.data());
     tau = &tau_;
   }
   if (hook_) return hook_->acceleration(base, q, v, *tau);
@@ -78,7 +88,7 @@ namespace {
 // Base update f <- f exp(h V0), kept orthonormal (rounding in long products of rotations).
 inline void advance_base(SE3& f, const Vec6& xi) {
   f = f * exp_se3(xi);
-  f.R = orthonormalize(f.R);
+  f.R = reorthonormalize(f.R);
 }
 
 /// Explicit (forward) Euler: every part of the state moves with the old rates.
@@ -89,10 +99,10 @@ class EulerStepper final : public Stepper {
   int order() const override { return 1; }
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
     const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
-    const int n = model_.n;
+    const int n = model_.n, nv = model_.nv;
     if (model_.floating) advance_base(x.base, h * x.v.head<6>());
-    x.q.noalias() += h * x.v.tail(n);
-    x.v.noalias() += h * a;
+    detail::axpy(n, h, x.v.data() + (nv - n), x.q.data());
+    detail::axpy(nv, h, a.data(), x.v.data());
     StepInfo info;
     info.evaluations = 1;
     info.substeps = 1;
@@ -108,10 +118,10 @@ class SymplecticEulerStepper final : public Stepper {
   int order() const override { return 1; }
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
     const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
-    const int n = model_.n;
-    x.v.noalias() += h * a;
+    const int n = model_.n, nv = model_.nv;
+    detail::axpy(nv, h, a.data(), x.v.data());
     if (model_.floating) advance_base(x.base, h * x.v.head<6>());
-    x.q.noalias() += h * x.v.tail(n);
+    detail::axpy(n, h, x.v.data() + (nv - n), x.q.data());
     StepInfo info;
     info.evaluations = 1;
     info.substeps = 1;

@@ -360,6 +360,30 @@ Mat3 orthonormalize(const Mat3& m) {
   return q.toRotationMatrix();
 }
 
+// With columns c_k of R and G = R^T R (G_jk = c_j . c_k), column k of the result is
+// 1.5 c_k - 0.5 sum_j c_j G_jk; each column as an (x, y) pair and a z.
+Mat3 reorthonormalize(const Mat3& R) {
+  const double* r = R.data();  // column-major
+  const v2d c[3] = {load2(r), load2(r + 3), load2(r + 6)};
+  const double z[3] = {r[2], r[5], r[8]};
+  double G[3][3];
+  for (int j = 0; j < 3; ++j) {
+    for (int k = j; k < 3; ++k) {
+      const v2d p = c[j] * c[k];
+      G[j][k] = G[k][j] = p[0] + p[1] + z[j] * z[k];
+    }
+  }
+  Mat3 out;
+  double* o = out.data();
+  for (int k = 0; k < 3; ++k) {
+    const v2d xy = 1.5 * c[k] - 0.5 * (c[0] * G[0][k] + c[1] * G[1][k] + c[2] * G[2][k]);
+    o[3 * k] = xy[0];
+    o[3 * k + 1] = xy[1];
+    o[3 * k + 2] = 1.5 * z[k] - 0.5 * (z[0] * G[0][k] + z[1] * G[1][k] + z[2] * G[2][k]);
+  }
+  return out;
+}
+
 Mat3 rotation_from_quaternion(double x, double y, double z, double w) {
   return Eigen::Quaterniond(w, x, y, z).normalized().toRotationMatrix();
 }

@@ -4,6 +4,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "lie/simd.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -174,9 +175,34 @@ void Simulator::applied_joint_efforts(VecX& out) {
   }
 }
 
+namespace {
+
+// to = from, for states of the same model (no resize check, no memcpy call for a dozen numbers).
+void save(const State& from, State& to) {
+  to.base = from.base;
+  detail::copy(static_cast<int>(from.q.size()), from.q.data(), to.q.data());
+  detail::copy(static_cast<int>(from.v.size()), from.v.data(), to.v.data());
+}
+
+}  // namespace
+
+// State::finite() with every rate within max_rate, in one pass over each vector.
 bool Simulator::rates_ok() const {
-  const VecX& v = state_.v;
-  return state_.finite() && (v.size() == 0 || v.cwiseAbs().maxCoeff() <= config_.guard.max_rate);
+  // A NaN fails the comparison and an infinity exceeds the limit.
+  const double lim = config_.guard.max_rate;
+  const double* v = state_.v.data();
+  bool ok = detail::all_finite(model_->n, state_.q.data());
+  for (int k = 0; k < model_->nv; ++k) ok &= std::abs(v[k]) <= lim;
+  if (!model_->floating) return ok;  // a fixed base does not move: no stepper writes it
+  const SE3& f = state_.base;
+  ok &= detail::all_finite(3, f.p.data());
+  // The six distinct entries of R^T R - 1 (NaN or large when R is bad).
+  const Mat3& R = f.R;
+  const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
+                       R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
+                       R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
+  for (double x : e) ok &= std::abs(x) < 1e-6;
+  return ok;
 }
 
 bool Simulator::energy_ok() {
@@ -206,9 +232,7 @@ bool Simulator::step() {
   }
   ++steps_;
   time_ += config_.dt;
-  last_good_.base = state_.base;
-  last_good_.q = state_.q;
-  last_good_.v = state_.v;
+  save(state_, last_good_);
   if (energy_step) {
     last_checked_.base = state_.base;
     last_checked_.q = state_.q;
