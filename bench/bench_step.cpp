@@ -11,7 +11,10 @@
 // of the step, then k ABA calls of the same scene (k chosen so that k ABA calls take about
 // 200 us), in thread CPU time (ratios stay meaningful on a shared, loaded machine). Counters:
 // `ns` and `aba_ns` are the medians over the batches of ns per call, `x_aba` = ns / aba_ns, and
-// `aba_calls` the ABA calls per step. The Time column is the mean ns per step.
+// `aba_calls` the ABA calls per step. `aba_chained_ns` and `x_aba_chained`: the same against ABA
+// calls chained through their inputs as a time loop chains them (AbaCall::chained): independent
+// calls overlap, which no integrator's dependent calls can, so x_aba charges that overlap to the
+// step and x_aba_chained does not. The Time column is the mean ns per step.
 // Targets (issue 3): symplectic_euler <= 1.2 x ABA, rkmk4 <= 4.5 x ABA; the whole
 // symplectic-Euler Simulator step on fixed_panda <= 1.27 us (MuJoCo 2.2's mj_step, 1.9 us / 1.5).
 //
@@ -78,15 +81,30 @@ Subject& subject(const std::string& name) {
   return it->second;
 }
 
-// The scene's ABA at its initial state (own Data, zero torques).
+// The scene's ABA at its initial state (own Data, zero torques). operator() calls it on the same
+// input every time: consecutive calls are independent and the processor overlaps the end of one
+// with the start of the next. chained() makes every input depend on the previous call's output,
+// as in any time loop (q <- q0 + 0 ddq, v <- v0 + 0 ddq: the same numbers, but the next call must
+// wait), and so includes those n + nv multiply-adds.
 struct AbaCall {
   const Subject& s;
   Data d;
-  VecX tau;
-  explicit AbaCall(const Subject& subj) : s(subj), d(subj.model), tau(VecX::Zero(subj.model.nv)) {}
+  VecX tau, q, v;
+  double zero;
+  explicit AbaCall(const Subject& subj)
+      : s(subj), d(subj.model), tau(VecX::Zero(subj.model.nv)), q(subj.x0.q), v(subj.x0.v) {
+    volatile double z = 0.0;  // not a constant the compiler could fold
+    zero = z;
+  }
   void operator()() {
     benchmark::DoNotOptimize(aba(s.model, d, s.x0.base, s.x0.q, s.x0.v, tau));
     benchmark::ClobberMemory();
+  }
+  void chained() {
+    const VecX& a = aba(s.model, d, s.x0.base, q, v, tau);
+    const int n = s.model.n, nv = s.model.nv;
+    for (int k = 0; k < n; ++k) q[k] = s.x0.q[k] + zero * a[nv - n + k];
+    for (int k = 0; k < nv; ++k) v[k] = s.x0.v[k] + zero * a[k];
   }
 };
 
@@ -105,7 +123,7 @@ void time_against_aba(benchmark::State& state, const Subject& s, F&& step) {
   AbaCall a(s);
   const int k = batch_size(a);
   for (int i = 0; i < 10; ++i) step();  // warm up
-  std::vector<double> t_step, t_aba;
+  std::vector<double> t_step, t_aba, t_chain;
   for (auto _ : state) {
     const double t0 = cpu_ns();
     for (int i = 0; i < k; ++i) {
@@ -115,14 +133,19 @@ void time_against_aba(benchmark::State& state, const Subject& s, F&& step) {
     const double t1 = cpu_ns();
     for (int i = 0; i < k; ++i) a();
     const double t2 = cpu_ns();
+    for (int i = 0; i < k; ++i) a.chained();
+    const double t3 = cpu_ns();
     t_step.push_back((t1 - t0) / k);
     t_aba.push_back((t2 - t1) / k);
+    t_chain.push_back((t3 - t2) / k);
     state.SetIterationTime((t1 - t0) * 1e-9 / k);
   }
-  const double ns = median(t_step), ref = median(t_aba);
+  const double ns = median(t_step), ref = median(t_aba), chain = median(t_chain);
   state.counters["ns"] = ns;
   state.counters["aba_ns"] = ref;
   state.counters["x_aba"] = ns / ref;
+  state.counters["aba_chained_ns"] = chain;
+  state.counters["x_aba_chained"] = ns / chain;
 }
 
 void BM_Aba(benchmark::State& state, const std::string& name) {
