@@ -339,6 +339,15 @@ TEST(Simulator, ResetStepAndCommands) {
   State moving = x0;
   moving.v << 1.0, -2.0;
   sim->set_state(moving);
+  // A non-finite state or a rotation that is not one is refused, and the state kept.
+  State bad = moving;
+  bad.base.p.x() = std::nan("");
+  EXPECT_THROW(sim->set_state(bad), std::invalid_argument);
+  bad = moving;
+  bad.base.R(0, 1) += 1e-3;
+  EXPECT_THROW(sim->set_state(bad), std::invalid_argument);
+  EXPECT_EQ(sim->state().v, moving.v);
+  EXPECT_TRUE(sim->state().finite());
   sim->set_joint_effort(2, 0.1);
   VecX eff;
   sim->applied_joint_efforts(eff);

@@ -179,7 +179,8 @@ class Simulator {
   /// Back to the initial state, commands cleared, failure cleared, time 0.
   void reset();
   void set_initial_state(const State& s);
-  /// Replaces the current state (sizes must match). Throws std::invalid_argument otherwise.
+  /// Replaces the current state. Throws std::invalid_argument (state unchanged) when the sizes do
+  /// not match or the state is not finite (State::finite).
   void set_state(const State& s);
   /// Changes the integrator or step size (state kept).
   void set_integrator(const std::string& name);

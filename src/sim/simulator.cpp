@@ -87,6 +87,10 @@ void Simulator::set_state(const State& s) {
   if (s.q.size() != model_->n || s.v.size() != model_->nv) {
     throw std::invalid_argument("state sizes do not match the model");
   }
+  // Refused here, not left to the guard: the guard checks what a step can change, and no step
+  // changes a fixed base's pose.
+  if (!s.finite())
+    throw std::invalid_argument("state is not finite (or its rotation not orthonormal)");
   state_.base = s.base;
   state_.q = s.q;
   state_.v = s.v;
