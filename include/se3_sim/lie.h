@@ -193,6 +193,9 @@ Mat6 spatial_inertia(double m, const Vec3& r, const Mat3& I_G);
 /// Eq. (24): F = J Vdot - ad*_V (J V).
 Vec6 newton_euler_wrench(const Mat6& J, const Vec6& V, const Vec6& Vdot);
 
+/// Whether every entry of R^T R - 1 is below tol in magnitude (false for a non-finite R: inf or
+/// NaN reaches the diagonal).
+bool is_rotation(const Mat3& R, double tol = 1e-6);
 /// Closest rotation to m (for renormalization after many products).
 Mat3 orthonormalize(const Mat3& m);
 /// One Newton-Schulz step toward the closest rotation, R (3 1 - R^T R) / 2: for R orthonormal to

@@ -13,17 +13,9 @@ namespace se3 {
 State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
 
 bool State::finite() const {
-  // The six distinct entries of R^T R - I; a non-finite R fails here too (inf or NaN on the
-  // diagonal).
-  const Mat3& R = base.R;
-  const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
-                       R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
-                       R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
-  bool ok = detail::all_finite(static_cast<int>(q.size()), q.data()) &&
-            detail::all_finite(static_cast<int>(v.size()), v.data()) &&
-            detail::all_finite(3, base.p.data());
-  for (double x : e) ok &= std::abs(x) < 1e-6;
-  return ok;
+  return detail::all_finite(static_cast<int>(q.size()), q.data()) &&
+         detail::all_finite(static_cast<int>(v.size()), v.data()) &&
+         detail::all_finite(3, base.p.data()) && is_rotation(base.R);
 }
 
 Stepper::Stepper(const Model& model, const StepperOptions& opt)

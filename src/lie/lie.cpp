@@ -354,6 +354,16 @@ Vec6 newton_euler_wrench(const Mat6& J, const Vec6& V, const Vec6& Vdot) {
   return J * Vdot - ad_star(V) * (J * V);
 }
 
+// The six distinct entries of the symmetric R^T R - 1.
+bool is_rotation(const Mat3& R, double tol) {
+  const double e[6] = {R.col(0).squaredNorm() - 1, R.col(1).squaredNorm() - 1,
+                       R.col(2).squaredNorm() - 1, R.col(0).dot(R.col(1)),
+                       R.col(0).dot(R.col(2)),     R.col(1).dot(R.col(2))};
+  bool ok = true;
+  for (double x : e) ok &= std::abs(x) < tol;
+  return ok;
+}
+
 Mat3 orthonormalize(const Mat3& m) {
   Eigen::Quaterniond q(m);
   q.normalize();

@@ -35,12 +35,6 @@ inline void axpy(int n, double c, const double* x, double* y) {
   for (; k + 2 <= n; k += 2) store2(y + k, load2(y + k) + c * load2(x + k));
   if (k < n) y[k] += c * x[k];
 }
-/// y = x + c z.
-inline void add_scaled(int n, const double* x, double c, const double* z, double* y) {
-  int k = 0;
-  for (; k + 2 <= n; k += 2) store2(y + k, load2(x + k) + c * load2(z + k));
-  if (k < n) y[k] = x[k] + c * z[k];
-}
 
 /// Whether all n entries are finite: x - x is 0 for a finite x and NaN for an infinity or a NaN,
 /// and a sum with a NaN in it is NaN (no early exit).
