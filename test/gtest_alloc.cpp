@@ -140,7 +140,7 @@ void check_no_allocation(const std::string& label, const Model& m) {
   SCOPED_TRACE(label);
   Data d(m);
   std::mt19937_64 rng(201);
-  const se3_test::State s = se3_test::random_state(m, rng);
+  const se3_test::RandomState s = se3_test::random_state(m, rng);
   Vec6 fext;
   fext << 0.1, -0.2, 0.3, 1, 2, 3;
   // The counter sees both kinds of allocation: an Eigen VecX (malloc) and a std::vector (new).

@@ -283,7 +283,7 @@ TEST(Constraints, JointLimitsHoldUnderLargeTorques) {
     VecX tau = VecX::Zero(m.nv);
     const double sgn = k < 1500 ? 1.0 : -1.0;
     for (int i = 0; i < m.nv; ++i) tau[i] = sgn * ((i % 2) ? 300.0 : -300.0);
-    ASSERT_TRUE(cs.step(*stepper, x, tau, h).ok);
+    ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, h).ok);
     worst = std::max(worst, cs.report().limit_violation);
     for (int i = 1; i <= m.n; ++i) {
       hits_lower += x.q[i - 1] < m.lower[i] + 1e-3;
@@ -333,7 +333,7 @@ void slope_run(double mu, double duration, double& disp, double& vel, double& pe
   pen = 0;
   const long steps = std::lround(duration / 1e-3);
   for (long k = 0; k < steps; ++k) {
-    ASSERT_TRUE(cs.step(*stepper, x, tau, 1e-3).ok);
+    ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, 1e-3).ok);
     pen = std::max(pen, cs.report().penetration);
   }
   disp = down.dot(x.base.p - p0);
@@ -419,9 +419,9 @@ TEST(Constraints, StepsAllocateNothingAfterTheFirst) {
     cs.anchor(x);
     auto stepper = make_stepper(sc.integrator, m);
     const VecX tau = VecX::Zero(m.nv);
-    for (int k = 0; k < 10; ++k) ASSERT_TRUE(cs.step(*stepper, x, tau, sc.dt).ok);
+    for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt).ok);
     const long before = g_allocations.load();
-    for (int k = 0; k < 300; ++k) cs.step(*stepper, x, tau, sc.dt);
+    for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt);
     EXPECT_EQ(g_allocations.load() - before, 0) << name;
   }
 }

@@ -18,8 +18,8 @@
 using namespace se3;
 using se3_test::Case;
 using se3_test::max_abs;
+using se3_test::RandomState;
 using se3_test::rel_err;
-using se3_test::State;
 
 namespace {
 
@@ -43,7 +43,7 @@ auto central_diff4(F&& g, double h) {
 // has, at t = 0, the time derivative it has along the true motion with acceleration a.
 struct Curve {
   const Model& m;
-  const State& s;
+  const RandomState& s;
   const VecX& a;
   SE3 base(double t) const {
     if (!m.floating) return s.base;
@@ -68,7 +68,7 @@ TEST(Dynamics, RneaOfAbaIsTau) {
     Data d(m);
     std::mt19937_64 rng(101);
     for (int k = 0; k < kStates; ++k) {
-      const State s = se3_test::random_state(m, rng);
+      const RandomState s = se3_test::random_state(m, rng);
       const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
       const VecX tau = rnea(m, d, s.base, s.q, s.v, a);
       const VecX H = bias(m, d, s.base, s.q, s.v);
@@ -106,7 +106,7 @@ TEST(Dynamics, EquationsOfMotion) {
     Data d(m);
     std::mt19937_64 rng(102);
     for (int k = 0; k < kStates; ++k) {
-      const State s = se3_test::random_state(m, rng);
+      const RandomState s = se3_test::random_state(m, rng);
       const MatX D = crba(m, d, s.base, s.q);
       const MatX Di = minv(m, d, s.base, s.q);
       const VecX H = bias(m, d, s.base, s.q, s.v);
@@ -168,7 +168,7 @@ TEST(Dynamics, KineticEnergy) {
     Data d(m);
     std::mt19937_64 rng(103);
     for (int k = 0; k < kStates; ++k) {
-      const State s = se3_test::random_state(m, rng);
+      const RandomState s = se3_test::random_state(m, rng);
       const MatX D = crba(m, d, s.base, s.q);
       const double T = kinetic_energy(m, d, s.base, s.q, s.v);
       EXPECT_NEAR(T, 0.5 * s.v.dot(D * s.v), 1e-13 * T) << c.label;
@@ -193,7 +193,7 @@ TEST(Dynamics, PowerBalance) {
     Data d(m);
     std::mt19937_64 rng(104);
     for (int k = 0; k < kStates; ++k) {
-      const State s = se3_test::random_state(m, rng);
+      const RandomState s = se3_test::random_state(m, rng);
       const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
       const Curve cv{m, s, a};
       auto energy = [&](double t) {
@@ -223,7 +223,7 @@ TEST(Dynamics, GravityIsTheGradientOfThePotential) {
     const Model& m = c.model;
     Data d(m);
     std::mt19937_64 rng(105);
-    const State s = se3_test::random_state(m, rng);
+    const RandomState s = se3_test::random_state(m, rng);
     const VecX zero = VecX::Zero(m.nv);
     const VecX G = rnea(m, d, s.base, s.q, zero, zero);
     VecX grad(m.nv);
@@ -252,7 +252,7 @@ TEST(Dynamics, MomentumConservation) {
     Data d(m);
     std::mt19937_64 rng(106);
     for (int k = 0; k < kStates; ++k) {
-      State s = se3_test::random_state(m, rng);
+      RandomState s = se3_test::random_state(m, rng);
       for (bool with_wrench : {false, true}) {
         if (!with_wrench) s.u.head<6>().setZero();
         const Vec6 Fb = s.u.head<6>();
@@ -318,7 +318,7 @@ TEST(Dynamics, MomentumRateUnderGravity) {
     const Model& m = c.model;
     Data d(m);
     std::mt19937_64 rng(107);
-    const State s = se3_test::random_state(m, rng);
+    const RandomState s = se3_test::random_state(m, rng);
     const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
     const Curve cv{m, s, a};
     auto h = [&](double t) { return Vec6(spatial_momentum(m, d, cv.base(t), cv.q(t), cv.v(t))); };
@@ -408,7 +408,7 @@ MinvAccuracy minv_vs_long_double(const Model& m, const std::string& label) {
   std::mt19937_64 rng(108);
   MinvAccuracy acc;
   for (int k = 0; k < kStates; ++k) {
-    const State s = se3_test::random_state(m, rng);
+    const RandomState s = se3_test::random_state(m, rng);
     const MatX D = crba(m, d, s.base, s.q);
     const MatX Di = minv(m, d, s.base, s.q);
     const MatXL DL = mass_matrix_long_double(m, s.base, s.q);
@@ -478,7 +478,7 @@ TEST(Dynamics, LongDoubleMassMatrixMatchesCrba) {
     const Model& m = c.model;
     Data d(m);
     std::mt19937_64 rng(109);
-    const State s = se3_test::random_state(m, rng);
+    const RandomState s = se3_test::random_state(m, rng);
     const MatX DL = mass_matrix_long_double(m, s.base, s.q).cast<double>();
     for (const bool local : {true, false}) {
       Data dv(m);

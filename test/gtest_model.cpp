@@ -163,7 +163,7 @@ TEST(Model, LinkFramesAndInertiasMatchTheUrdf) {
       ASSERT_TRUE(u);
       Data d(m);
       for (int trial = 0; trial < 5; ++trial) {
-        const se3_test::State s = se3_test::random_state(m, rng);
+        const se3_test::RandomState s = se3_test::random_state(m, rng);
         std::map<std::string, double> qmap;
         for (int i = 1; i <= m.n; ++i) qmap[m.joint_name[i]] = s.q[i - 1];
         const auto poses = urdf_link_poses(*u, s.base, qmap);

@@ -291,7 +291,7 @@ TEST(Guard, KineticEnergyBoundIsNeverBelowTheEnergy) {
     const Model& m = c.model;
     Data d(m);
     KineticEnergyBound bound(m);
-    auto check = [&](const se3_test::State& s, const VecX& v) {
+    auto check = [&](const se3_test::RandomState& s, const VecX& v) {
       const double T = kinetic_energy(m, d, s.base, s.q, v);
       const double B = bound(s.q, v);
       EXPECT_GE(B, T * (1 - 1e-12)) << "v = " << v.transpose();
@@ -302,7 +302,7 @@ TEST(Guard, KineticEnergyBoundIsNeverBelowTheEnergy) {
       ++checked;
     };
     for (int k = 0; k < 20; ++k) {
-      se3_test::State s = se3_test::random_state(m, rng);
+      se3_test::RandomState s = se3_test::random_state(m, rng);
       if (k % 4 == 1) {
         for (int i = 1; i <= m.n; ++i) {
           if (m.joint_type[i] == JointType::Prismatic) s.q[i - 1] = se3_test::uniform(rng, -2, 2);
@@ -310,7 +310,7 @@ TEST(Guard, KineticEnergyBoundIsNeverBelowTheEnergy) {
       }
       check(s, k % 4 == 2 ? VecX(1e3 * s.v) : s.v);
     }
-    const se3_test::State s = se3_test::random_state(m, rng);
+    const se3_test::RandomState s = se3_test::random_state(m, rng);
     for (int k = 0; k < m.nv && k < 40; ++k) {
       VecX v = VecX::Zero(m.nv);
       v[k] = k % 2 ? 2.0 : -0.5;

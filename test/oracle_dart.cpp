@@ -26,7 +26,6 @@
 using namespace se3;
 using se3_test::max_abs;
 using se3_test::rel_err;
-using se3_test::State;
 
 namespace {
 
@@ -152,7 +151,7 @@ void compare(const std::string& label, const std::string& path, bool floating) {
 
   std::mt19937_64 rng(301);
   for (int trial = 0; trial < 4; ++trial) {
-    State s = se3_test::random_state(m, rng);
+    se3_test::RandomState s = se3_test::random_state(m, rng);
     if (!floating) s.base = SE3();  // DART's fixed root sits at the world origin
     VecX qd = VecX::Zero(m.nv);     // DART positions: [log R; p] for the free joint, then joints
     if (floating) {

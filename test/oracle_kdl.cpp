@@ -22,7 +22,6 @@
 
 using namespace se3;
 using se3_test::rel_err;
-using se3_test::State;
 
 namespace {
 
@@ -83,7 +82,7 @@ void compare_tree(const std::string& label, const std::string& urdf) {
   KDL::TreeIdSolver_RNE id0(tree, KDL::Vector::Zero());
   std::mt19937_64 rng(401);
   for (int trial = 0; trial < 4; ++trial) {
-    const State s = se3_test::random_state(m, rng);
+    const se3_test::RandomState s = se3_test::random_state(m, rng);
     const SE3 base;  // KDL's root is the world
     const VecX a = se3_test::random_vec(rng, m.n, 1.0);
     KDL::JntArray tau(m.n);
@@ -131,7 +130,7 @@ void compare_chain(const std::string& label, const std::string& urdf, const std:
   KDL::ChainDynParam dyn(chain, KDL::Vector(g.x(), g.y(), g.z()));
   std::mt19937_64 rng(402);
   for (int trial = 0; trial < 4; ++trial) {
-    const State s = se3_test::random_state(m, rng);
+    const se3_test::RandomState s = se3_test::random_state(m, rng);
     KDL::JntArray q(m.n);
     for (int k = 0; k < m.n; ++k) q(k) = s.q[map[k] - 1];
     KDL::JntSpaceInertiaMatrix H(m.n);

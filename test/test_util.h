@@ -107,13 +107,13 @@ inline SE3 random_pose(std::mt19937_64& rng, double pos_scale = 1.0) {
 
 /// A random state: base pose, joint positions (revolute in [-pi, pi], prismatic within 0.05 m),
 /// generalized velocity and a generalized force / acceleration, all of order 1.
-struct State {
+struct RandomState {
   SE3 base;
   VecX q, v, u;
 };
 
-inline State random_state(const se3::Model& m, std::mt19937_64& rng) {
-  State s;
+inline RandomState random_state(const se3::Model& m, std::mt19937_64& rng) {
+  RandomState s;
   s.base = random_pose(rng);
   s.q.resize(m.n);
   for (int i = 1; i <= m.n; ++i) {

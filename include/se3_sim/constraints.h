@@ -49,7 +49,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/dynamics.h"
 
 namespace se3 {
 
@@ -173,9 +173,15 @@ class ConstraintSystem final : public AccelerationHook {
   /// Projects x onto Psi = 0 and Psi w = 0 (D metric). Returns the final max |phi|.
   double project(State& x);
 
-  /// One step of h: bilateral only -> the stepper with the hook, then projection; with limits
-  /// or contact -> velocity-level time stepping (see the header comment).
-  StepInfo step(Stepper& stepper, State& x, const VecX& tau_cmd, double h);
+  // A time step under the constraints is integrate.h's constrained_step, in two ways:
+  /// The end of a step with only bilateral constraints, after an integrator has taken it with
+  /// this system as its acceleration hook: projection (or, without it, the error), the report,
+  /// and the forces of the last stage's multipliers at the end-of-step configuration.
+  void finish_bilateral_step(State& x);
+  /// With limits or contact: one velocity-level time step of h (see the header comment) from the
+  /// free acceleration a_free (ABA with the passive forces, no hook). Returns false when the
+  /// solve produced a non-finite state.
+  bool velocity_step(State& x, const VecX& a_free, double h);
 
   /// Largest constraint error at x: bilateral |phi| (m or rad), penetration (m) and limit
   /// excursion (rad or m), whichever is largest.
@@ -213,7 +219,6 @@ class ConstraintSystem final : public AccelerationHook {
   Vec3 point_accel_bias(const PointRef& p) const;
   /// Solves Wb_ out = rhs by LDLT, or by the pseudo-inverse when Wb_ is rank deficient.
   void solve_multipliers(const VecX& rhs, VecX& out);
-  StepInfo time_step(Stepper& stepper, State& x, const VecX& tau_cmd, double h);
   void assemble_bilateral_forces(const VecX& lam, double scale);
 
   const Model& model_;

@@ -95,4 +95,27 @@ Vec6 spatial_momentum(const Model& model, Data& data, const SE3& base, const Vec
 /// Centre of mass of the whole system, world frame.
 Vec3 center_of_mass(const Model& model, Data& data, const SE3& base, const VecX& q);
 
+/// The simulated state (see the top of this file): q has n entries, v has nv.
+struct State {
+  SE3 base;
+  VecX q;
+  VecX v;
+
+  State() = default;
+  /// Zero state of the right sizes (base at the identity).
+  explicit State(const Model& model);
+  /// Every number finite and the base rotation orthonormal to 1e-6.
+  bool finite() const;
+};
+
+/// An acceleration function that replaces the plain ABA inside a time step (integrate.h's
+/// Stepper::acceleration; constraints.h: the multipliers of eq. (32) at every stage). tau is the
+/// total generalized force (command plus passive forces).
+class AccelerationHook {
+ public:
+  virtual ~AccelerationHook() = default;
+  virtual const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v,
+                                   const VecX& tau) = 0;
+};
+
 }  // namespace se3

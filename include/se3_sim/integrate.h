@@ -28,19 +28,6 @@
 
 namespace se3 {
 
-/// The simulated state. q has n entries, v has nv (see dynamics.h).
-struct State {
-  SE3 base;
-  VecX q;
-  VecX v;
-
-  State() = default;
-  /// Zero state of the right sizes (base at the identity).
-  explicit State(const Model& model);
-  /// Every number finite and the base rotation orthonormal to 1e-6.
-  bool finite() const;
-};
-
 struct StepperOptions {
   /// Error tolerance of adaptive steppers (absolute and relative, per component).
   double tol = 1e-6;
@@ -60,16 +47,6 @@ struct StepInfo {
   int substeps = 0;     ///< accepted internal steps (1 for fixed-step methods)
   int rejected = 0;     ///< rejected internal steps (adaptive only)
   std::string reason;   ///< why the step failed (ok == false); the state is then unchanged
-};
-
-/// Replaces the plain ABA acceleration inside Stepper::acceleration() (constraints.h: the
-/// multipliers of eq. (32) at every stage). tau is the total generalized force (command plus
-/// passive forces).
-class AccelerationHook {
- public:
-  virtual ~AccelerationHook() = default;
-  virtual const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v,
-                                   const VecX& tau) = 0;
 };
 
 class Stepper {
@@ -100,7 +77,7 @@ class Stepper {
   const StepperOptions& options() const { return opt_; }
   Data& data() { return data_; }
   /// Constraint hook (not owned; nullptr = unconstrained ABA, the default). Set around a step
-  /// by ConstraintSystem::step (constraints.h).
+  /// by constrained_step (below).
   void set_acceleration_hook(AccelerationHook* hook) { hook_ = hook; }
   AccelerationHook* acceleration_hook() const { return hook_; }
 
@@ -154,5 +131,15 @@ ButcherTableau tableau_dormand_prince45();
 /// The RKMK stepper for any explicit tableau (fixed step, or adaptive with b_err).
 std::unique_ptr<Stepper> make_rkmk_stepper(const ButcherTableau& tableau, const Model& model,
                                            const StepperOptions& opt);
+
+class ConstraintSystem;  // constraints.h (dynamics layer)
+
+/// One step of h under the constraints (constraints.h). With only bilateral constraints the
+/// stepper integrates with the multipliers of eq. (32) in every stage (the system is its
+/// acceleration hook for the step) and the system then projects the state and records the
+/// forces; with joint limits or contact the system takes a velocity-level time step from the
+/// free acceleration (ABA with the passive forces). On failure the result says why.
+StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State& x,
+                          const VecX& tau_cmd, double h);
 
 }  // namespace se3

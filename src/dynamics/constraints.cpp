@@ -446,13 +446,7 @@ double ConstraintSystem::error(const State& x) {
   return e;
 }
 
-StepInfo ConstraintSystem::step(Stepper& stepper, State& x, const VecX& tau_cmd, double h) {
-  if (has_unilateral()) return time_step(stepper, x, tau_cmd, h);
-  AccelerationHook* const previous = stepper.acceleration_hook();
-  stepper.set_acceleration_hook(this);
-  StepInfo info = stepper.step(x, tau_cmd, h);
-  stepper.set_acceleration_hook(previous);
-  if (!info.ok) return info;
+void ConstraintSystem::finish_bilateral_step(State& x) {
   if (opt_.project) {
     project(x);
   } else {
@@ -464,7 +458,6 @@ StepInfo ConstraintSystem::step(Stepper& stepper, State& x, const VecX& tau_cmd,
   // Forces of the last stage's multipliers, placed at the end-of-step configuration.
   kinematics(x.base, x.q, nullptr);
   assemble_bilateral_forces(lambda_, 1.0);
-  return info;
 }
 
 void ConstraintSystem::assemble_bilateral_forces(const VecX& lam, double scale) {
@@ -486,17 +479,10 @@ void ConstraintSystem::assemble_bilateral_forces(const VecX& lam, double scale) 
   }
 }
 
-StepInfo ConstraintSystem::time_step(Stepper& stepper, State& x, const VecX& tau_cmd, double h) {
-  StepInfo info;
-  info.evaluations = 1;
-  info.substeps = 1;
+bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h) {
   const Model& m = model_;
-  AccelerationHook* const previous = stepper.acceleration_hook();
-  stepper.set_acceleration_hook(nullptr);
-  a_ = stepper.acceleration(x.base, x.q, x.v, tau_cmd);  // passive forces included
-  stepper.set_acceleration_hook(previous);
   vfree_ = x.v;
-  vfree_.noalias() += h * a_;
+  vfree_.noalias() += h * a_free;
 
   // ---- rows
   kinematics(x.base, x.q, nullptr);
@@ -717,11 +703,7 @@ StepInfo ConstraintSystem::time_step(Stepper& stepper, State& x, const VecX& tau
     fill_bilateral(false);
     report_.bilateral_error = phi_.cwiseAbs().maxCoeff();
   }
-  if (!x.finite()) {
-    info.ok = false;
-    info.reason = "constraint solve produced a non-finite state";
-  }
-  return info;
+  return x.finite();
 }
 
 }  // namespace se3

@@ -1,3 +1,4 @@
+#include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
@@ -49,6 +50,14 @@ Data::Data(const Model& model) {
     P_slot[i] = (sib.back() == i) ? P_slot[model.parent[i]] : slots++;
   }
   Pm.assign(slots, Mat6X::Zero(6, model.nv));
+}
+
+State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
+
+bool State::finite() const {
+  return detail::all_finite(static_cast<int>(q.size()), q.data()) &&
+         detail::all_finite(static_cast<int>(v.size()), v.data()) &&
+         detail::all_finite(3, base.p.data()) && is_rotation(base.R);
 }
 
 }  // namespace se3

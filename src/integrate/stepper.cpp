@@ -10,14 +10,6 @@
 
 namespace se3 {
 
-State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
-
-bool State::finite() const {
-  return detail::all_finite(static_cast<int>(q.size()), q.data()) &&
-         detail::all_finite(static_cast<int>(v.size()), v.data()) &&
-         detail::all_finite(3, base.p.data()) && is_rotation(base.R);
-}
-
 Stepper::Stepper(const Model& model, const StepperOptions& opt)
     : model_(model),
       opt_(opt),

@@ -216,8 +216,9 @@ bool Simulator::energy_ok() {
 // Invariant between steps: last_good_ is the state, and time and step count are its.
 bool Simulator::step() {
   if (!failure_.empty()) return false;
-  const StepInfo info = constraints_ ? constraints_->step(*stepper_, state_, command_, config_.dt)
-                                     : stepper_->step(state_, command_, config_.dt);
+  const StepInfo info =
+      constraints_ ? constrained_step(*constraints_, *stepper_, state_, command_, config_.dt)
+                   : stepper_->step(state_, command_, config_.dt);
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;

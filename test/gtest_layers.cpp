@@ -1,0 +1,106 @@
+// The library's layers depend one way (DESIGN.md, "Layers"): no header or source file of a layer
+// includes a header of a layer above it or beside it. Read from the sources, so that an upward
+// include fails here before it becomes a cycle. render depends on dynamics as well (it poses the
+// robot at joint positions q by forward kinematics, which DESIGN.md puts in dynamics).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+#ifndef SE3_SIM_SOURCE_DIR
+#define SE3_SIM_SOURCE_DIR "."
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Public headers (under include/se3_sim/) and internal ones (under src/) by layer.
+const std::map<std::string, std::string> kHeaderLayer = {
+    {"se3_sim/lie.h", "lie"},
+    {"lie/simd.h", "lie"},
+    {"se3_sim/model.h", "model"},
+    {"se3_sim/dynamics.h", "dynamics"},
+    {"se3_sim/constraints.h", "dynamics"},
+    {"se3_sim/integrate.h", "integrate"},
+    {"se3_sim/render.h", "render"},
+    {"se3_sim/render/camera.h", "render"},
+    {"se3_sim/render/raster.h", "render"},
+    {"se3_sim/teleop.h", "teleop"},
+    {"se3_sim/sim.h", "sim"},
+};
+
+// What each layer may include: itself and the layers below it.
+const std::map<std::string, std::set<std::string>> kAllowed = {
+    {"lie", {"lie"}},
+    {"model", {"lie", "model"}},
+    {"dynamics", {"lie", "model", "dynamics"}},
+    {"integrate", {"lie", "model", "dynamics", "integrate"}},
+    {"render", {"lie", "model", "dynamics", "render"}},
+    {"teleop", {"lie", "model", "teleop"}},
+    {"sim", {"lie", "model", "dynamics", "integrate", "sim"}},
+};
+
+// The files of a layer: its public headers and src/<layer>/.
+std::vector<fs::path> layer_files(const fs::path& root, const std::string& layer) {
+  std::vector<fs::path> files;
+  for (const auto& hl : kHeaderLayer) {
+    if (hl.second == layer && hl.first.rfind("se3_sim/", 0) == 0) {
+      files.push_back(root / "include" / hl.first);
+    }
+  }
+  for (const auto& e : fs::recursive_directory_iterator(root / "src" / layer)) {
+    const std::string ext = e.path().extension().string();
+    if (ext == ".cpp" || ext == ".h") files.push_back(e.path());
+  }
+  return files;
+}
+
+std::vector<std::string> quoted_includes(const fs::path& file) {
+  static const std::regex include_re(R"re(^\s*#\s*include\s*"([^"]+)")re");
+  std::vector<std::string> out;
+  std::ifstream in(file);
+  std::string line;
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (std::regex_search(line, m, include_re)) out.push_back(m[1]);
+  }
+  return out;
+}
+
+TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
+  const fs::path root = SE3_SIM_SOURCE_DIR;
+  int checked = 0;
+  for (const auto& la : kAllowed) {
+    const std::string& layer = la.first;
+    const auto files = layer_files(root, layer);
+    EXPECT_FALSE(files.empty()) << layer;
+    for (const fs::path& f : files) {
+      for (const std::string& inc : quoted_includes(f)) {
+        const auto it = kHeaderLayer.find(inc);
+        if (it == kHeaderLayer.end()) {
+          // Anything else must be a file of the same directory (a layer's internal header).
+          EXPECT_TRUE(fs::exists(f.parent_path() / inc))
+              << f << " includes \"" << inc << "\", which is no layer's header";
+          continue;
+        }
+        ++checked;
+        EXPECT_TRUE(la.second.count(it->second))
+            << f << " (layer " << layer << ") includes " << inc << " of layer " << it->second;
+      }
+    }
+  }
+  EXPECT_GT(checked, 20);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
