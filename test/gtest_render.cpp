@@ -242,6 +242,41 @@ TEST(RenderRaster, BoxCoversExpectedPixelsAndBackgroundElsewhere) {
   EXPECT_GT(int(q.b), int(q.r) + 60);
 }
 
+// A box marker turns with its orientation R (a satellite bus tumbles with its base): a 2 x 0.2 x
+// 0.2 m bar is wide on screen along world x, tall once R turns its x axis onto world z, and a
+// non-rotation R draws nothing.
+TEST(RenderScene, BoxMarkerTurnsWithItsOrientation) {
+  auto coloured = [](Renderer& r, int x, int y) {
+    const Rgb q = r.framebuffer().rgb(x, y);
+    return int(q.r) > int(q.g) + 60;
+  };
+  auto extents = [&](const Mat3& R, int& wide, int& tall) {
+    Renderer r(level_camera());
+    make_plain(r);
+    r.draw_background();
+    Marker m;
+    m.type = Marker::Type::Box;
+    m.a = Vec3(0, 0, 1);
+    m.size3 = Vec3(2.0, 0.2, 0.2);
+    m.R = R;
+    m.color = Eigen::Vector3d(0.9, 0.1, 0.1);
+    r.draw_marker(m);
+    wide = tall = 0;
+    for (int x = 0; x < 1280; ++x) wide += coloured(r, x, 512);
+    for (int y = 0; y < 1024; ++y) tall += coloured(r, 640, y);
+  };
+  int wide = 0, tall = 0;
+  extents(Mat3::Identity(), wide, tall);
+  // Front face at depth 4.9: 2 m span 1000 * 2 / 4.9 = 408 px, 0.2 m span 41 px.
+  EXPECT_NEAR(wide, 408, 4);
+  EXPECT_NEAR(tall, 41, 3);
+  extents(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY()).toRotationMatrix(), wide, tall);
+  EXPECT_NEAR(wide, 41, 3);
+  EXPECT_NEAR(tall, 408, 4);
+  extents(2.0 * Mat3::Identity(), wide, tall);
+  EXPECT_EQ(wide + tall, 0);
+}
+
 namespace {
 
 // Base box + one revolute body whose visual is a mesh (no collision): its stand-in runs from

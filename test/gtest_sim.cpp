@@ -67,6 +67,11 @@ TEST(Scene, SatelliteArmIsTheFreeFloatingPandaWithLockedFingersAndABus) {
   o.locked = s.locked_joints;
   const Model bare = model_from_urdf_file(s.robot_path, o);
   EXPECT_NEAR(m.inertia[0].m - bare.inertia[0].m, 50.0, 1e-12);
+  // ... and is drawn: a 0.6 m box centred 0.3 m below the base link (it is not in the URDF).
+  ASSERT_TRUE(s.has_base_visual);
+  EXPECT_EQ(s.base_visual_box, Vec3(0.6, 0.6, 0.6));
+  EXPECT_EQ(s.base_visual_origin, Vec3(0, 0, -0.3));
+  EXPECT_EQ(s.base_visual_origin, s.base_com);
   // Torques on the arm make the satellite counter-rotate: a shoulder torque about z spins the
   // base the other way about z, with zero total angular momentum.
   auto sim = make_simulator(s);
@@ -135,6 +140,16 @@ TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
             std::string::npos);
   EXPECT_NE(scene_error("robot: chain:2\nbase_inertia: {mass: 1, inertia: [1, 1, 5]}\n")
                 .find("not a physical inertia"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_visual: {origin: [0, 0, 1]}\n").find("needs box"),
+            std::string::npos);
+  EXPECT_NE(
+      scene_error("robot: chain:2\nbase_visual: {box: [1, 0, 1]}\n").find("three positive extents"),
+      std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_visual: {box: [1, 1, 1], color: [1, 2, 0]}\n")
+                .find("in [0, 1]"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_visual: {box: [1, 1, 1], size: 2}\n").find("size"),
             std::string::npos);
   // A joint the model does not have.
   const Scene s = parse_scene("robot: chain:2\ninitial_positions: {j9: 1}\n", kScenes);

@@ -1,12 +1,14 @@
 // rostest node for simulator_node (test/simulator.test): rates of joint_states and TF, every
-// link in TF, torque commands by name, rejection of bad commands, stale commands, and the
-// reset/pause/resume/step services. Comparisons of motion are made between runs from the same
-// reset state advanced by the step service, so they do not depend on wall-clock timing.
+// link in TF, the scene's bus on sim_markers, torque commands by name, rejection of bad commands,
+// stale commands, and the reset/pause/resume/step services. Comparisons of motion are made between
+// runs from the same reset state advanced by the step service, so they do not depend on
+// wall-clock timing.
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Empty.h>
 #include <tf2_msgs/TFMessage.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include <atomic>
 #include <cmath>
@@ -19,6 +21,7 @@
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
+#include "se3_sim/lie.h"
 #include "se3_sim/model.h"
 
 namespace {
@@ -32,6 +35,8 @@ struct Listener {
   se3_sim::SimStats last_stats;
   int stats_count = 0;
   bool nan_seen = false;
+  visualization_msgs::Marker last_bus;  // sim_markers, namespace base_visual
+  int bus_count = 0;
 
   void on_js(const sensor_msgs::JointState::ConstPtr& m) {
     std::lock_guard<std::mutex> l(mu);
@@ -49,6 +54,14 @@ struct Listener {
   void on_cs(const se3_sim::ChainState::ConstPtr& m) {
     std::lock_guard<std::mutex> l(mu);
     last_cs = *m;
+  }
+  void on_markers(const visualization_msgs::MarkerArray::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    for (const auto& k : m->markers) {
+      if (k.ns != "base_visual") continue;
+      last_bus = k;
+      ++bus_count;
+    }
   }
   void on_stats(const se3_sim::SimStats::ConstPtr& m) {
     std::lock_guard<std::mutex> l(mu);
@@ -140,6 +153,36 @@ TEST(Simulator, PublishesJointStatesAndEveryLinkInTfAtTheRate) {
   EXPECT_EQ(g->last_js.velocity.size(), g->last_js.name.size());
   EXPECT_EQ(g->last_js.effort.size(), g->last_js.name.size());
   EXPECT_FALSE(g->nan_seen);
+}
+
+// The scene's bus (base_visual: not in the URDF) is published on sim_markers as a box that moves
+// and turns with the base: centre at base * (0, 0, -0.3), the base's orientation, 0.6 m sides.
+TEST(Simulator, SceneBusIsABoxMarkerThatFollowsTheBase) {
+  EXPECT_TRUE(call_empty("simulator/pause"));
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  const auto r = step(500);  // the arm's initial rates turn the base
+  EXPECT_TRUE(r.success) << r.message;
+  wait(3.0 / g_rate);
+  std::lock_guard<std::mutex> l(g->mu);
+  ASSERT_GT(g->bus_count, 0) << "no base_visual marker on sim_markers";
+  const visualization_msgs::Marker& b = g->last_bus;
+  const geometry_msgs::Pose& base = g->last_cs.base_pose;
+  EXPECT_EQ(b.type, visualization_msgs::Marker::CUBE);
+  EXPECT_EQ(b.header.frame_id, g->last_cs.header.frame_id);
+  EXPECT_DOUBLE_EQ(b.scale.x, 0.6);
+  EXPECT_DOUBLE_EQ(b.scale.y, 0.6);
+  EXPECT_DOUBLE_EQ(b.scale.z, 0.6);
+  const se3::Mat3 R = se3::rotation_from_quaternion(base.orientation.x, base.orientation.y,
+                                                    base.orientation.z, base.orientation.w);
+  const se3::Mat3 Rb = se3::rotation_from_quaternion(b.pose.orientation.x, b.pose.orientation.y,
+                                                     b.pose.orientation.z, b.pose.orientation.w);
+  EXPECT_GT((R - se3::Mat3::Identity()).norm(), 1e-4);  // the base has turned
+  EXPECT_LT((Rb - R).norm(), 1e-9);
+  const se3::Vec3 c =
+      se3::Vec3(base.position.x, base.position.y, base.position.z) + R * se3::Vec3(0, 0, -0.3);
+  EXPECT_NEAR(b.pose.position.x, c.x(), 1e-9);
+  EXPECT_NEAR(b.pose.position.y, c.y(), 1e-9);
+  EXPECT_NEAR(b.pose.position.z, c.z(), 1e-9);
 }
 
 TEST(Simulator, TorqueByNameMovesThatJoint) {
@@ -263,6 +306,7 @@ int main(int argc, char** argv) {
   ros::Subscriber b = nh.subscribe("/tf", 100, &Listener::on_tf, &listener);
   ros::Subscriber c = nh.subscribe("chain_state", 100, &Listener::on_cs, &listener);
   ros::Subscriber d = nh.subscribe("sim_stats", 100, &Listener::on_stats, &listener);
+  ros::Subscriber e = nh.subscribe("sim_markers", 100, &Listener::on_markers, &listener);
   ros::AsyncSpinner spinner(2);
   spinner.start();
   if (!ros::service::waitForService("simulator/step", ros::Duration(20.0))) {

@@ -50,9 +50,10 @@ struct Marker {
   Vec3 a = Vec3::Zero();  ///< position (point, sphere, box centre) or start (arrow, line)
   Vec3 b = Vec3::Zero();  ///< end (arrow, line)
   /// Point: diameter in pixels; sphere: diameter (m); arrow: shaft diameter (m); line: width in
-  /// pixels; box: full extents along the world axes (m, all three entries of size3).
+  /// pixels; box: full extents along its axes R (m, all three entries of size3).
   double size = 0.02;
   Vec3 size3 = Vec3::Constant(0.1);
+  Mat3 R = Mat3::Identity();  ///< box: orientation in the world (columns: its axes)
   Eigen::Vector3d color = Eigen::Vector3d(1.0, 0.3, 0.1);  ///< rgb in [0, 1]
 };
 
@@ -93,9 +94,10 @@ struct DrawItem {
 /// and by the node for its RViz MarkerArray.
 std::vector<DrawItem> make_draw_items(const Model& model);
 
-/// Chooses an eye and target that show bodies at the given poses (and the ground) from a
-/// three-quarter view; keeps cam's image size and focal length.
-void frame_bodies(const Model& model, const std::vector<SE3>& oMb, Camera& cam);
+/// Chooses an eye and target that show bodies at the given poses and the box markers among
+/// boxes (and the ground) from a three-quarter view; keeps cam's image size and focal length.
+void frame_bodies(const Model& model, const std::vector<SE3>& oMb, Camera& cam,
+                  const std::vector<Marker>& boxes = {});
 
 class Renderer {
  public:

@@ -26,6 +26,10 @@ struct SceneError : std::runtime_error {
 ///   base_twist: [wx,wy,wz,vx,vy,vz] (base frame; free base only)
 ///   base_inertia: {mass: m, com: [x,y,z], inertia: [ixx,iyy,izz(,ixy,ixz,iyz)]}
 ///       a rigid body added to the base link (e.g. a satellite bus), inertia about its com
+///   base_visual: {box: [x,y,z], origin: [x,y,z], color: [r,g,b]}
+///       a box drawn on the base link (centre at origin, base link frame; colour in [0, 1]):
+///       what base_inertia adds has no URDF geometry. The simulator node publishes it on
+///       sim_markers (namespace base_visual), and `se3_dyn render --scene` draws it.
 ///   initial_positions: {joint: value, ...}   initial_velocities: {joint: value, ...}
 ///   locked_joints: {joint: value, ...}       (treated as fixed at that value)
 ///   gravity: [gx,gy,gz]             integrator: rkmk4     dt: 0.001    tol: 1e-6
@@ -45,6 +49,10 @@ struct Scene {
   double base_mass = 0;
   Vec3 base_com = Vec3::Zero();
   Mat3 base_inertia = Mat3::Zero();  ///< about base_com, base link axes
+  bool has_base_visual = false;
+  Vec3 base_visual_box = Vec3::Zero();     ///< full extents (m)
+  Vec3 base_visual_origin = Vec3::Zero();  ///< box centre, base link frame
+  Vec3 base_visual_color = Vec3(0.8, 0.72, 0.4);
   SE3 base_pose;
   Vec6 base_twist = Vec6::Zero();
   std::vector<std::pair<std::string, double>> initial_positions;

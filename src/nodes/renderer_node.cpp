@@ -190,7 +190,7 @@ class RendererNode {
     }
     if (any_new && !framed_ && !user_camera_) {
       rn::Camera cam = renderer_->camera();
-      rn::frame_bodies(*model_, poses_, cam);
+      rn::frame_bodies(*model_, poses_, cam, convert_markers());
       renderer_->set_camera(cam);
       framed_ = true;
     }
@@ -204,10 +204,13 @@ class RendererNode {
         continue;
       }
       const auto key = std::make_pair(m.ns, m.id);
-      if (m.action == visualization_msgs::Marker::DELETE)
+      if (m.action == visualization_msgs::Marker::DELETE) {
         sim_markers_.erase(key);
-      else
-        sim_markers_[key] = m;
+        continue;
+      }
+      // A box that is new (e.g. the scene's satellite bus) is solid geometry: frame it too.
+      if (m.type == visualization_msgs::Marker::CUBE && !sim_markers_.count(key)) framed_ = false;
+      sim_markers_[key] = m;
     }
   }
 
@@ -287,6 +290,7 @@ class RendererNode {
         case visualization_msgs::Marker::CUBE:
           r.type = rn::Marker::Type::Box;
           r.a = pose.p;
+          r.R = pose.R;
           r.size3 = Vec3(m.scale.x, m.scale.y, m.scale.z);
           out.push_back(r);
           break;

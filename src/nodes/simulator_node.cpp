@@ -529,6 +529,23 @@ class SimulatorNode {
       com.color.g = 0.8;
       com.color.a = 1.0;
       markers.markers.push_back(com);
+      if (scene_.has_base_visual) {  // the scene's box on the base link (e.g. a satellite bus)
+        visualization_msgs::Marker bus;
+        bus.header = com.header;
+        bus.ns = "base_visual";
+        bus.id = 0;
+        bus.type = visualization_msgs::Marker::CUBE;
+        bus.action = visualization_msgs::Marker::ADD;
+        bus.pose = to_pose(se3::SE3(x.base.R, x.base.act(scene_.base_visual_origin)));
+        bus.scale.x = scene_.base_visual_box.x();
+        bus.scale.y = scene_.base_visual_box.y();
+        bus.scale.z = scene_.base_visual_box.z();
+        bus.color.r = scene_.base_visual_color.x();
+        bus.color.g = scene_.base_visual_color.y();
+        bus.color.b = scene_.base_visual_color.z();
+        bus.color.a = 1.0;
+        markers.markers.push_back(bus);
+      }
       const std::vector<se3::SE3>& oMb = sim_->body_poses();
       for (int i = 1; i <= m.n; ++i) {
         visualization_msgs::Marker a;

@@ -240,7 +240,8 @@ std::vector<DrawItem> make_draw_items(const Model& model) {
   return items;
 }
 
-void frame_bodies(const Model& model, const std::vector<SE3>& oMb, Camera& cam) {
+void frame_bodies(const Model& model, const std::vector<SE3>& oMb, Camera& cam,
+                  const std::vector<Marker>& boxes) {
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   int cnt = 0;
   auto add = [&](const Vec3& p) {
@@ -254,6 +255,13 @@ void frame_bodies(const Model& model, const std::vector<SE3>& oMb, Camera& cam) 
     add(oMb[i].p);
     for (size_t c = 1; c < model.parent.size() && c < model.X_tree.size(); ++c)
       if (model.parent[c] == int(i)) add(oMb[i].act(model.X_tree[c].p));
+  }
+  for (const Marker& m : boxes) {  // the corners of box markers (solid geometry, like a body)
+    if (m.type != Marker::Type::Box || !m.R.allFinite()) continue;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 s((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
+      add(m.a + m.R * s.cwiseProduct(m.size3));
+    }
   }
   if (!cnt) add(Vec3::Zero());
   const Vec3 center = 0.5 * (lo + hi);
@@ -503,7 +511,8 @@ void Renderer::draw_marker(const Marker& m) {
       draw_sphere(SE3(Mat3::Identity(), m.a), Vec3::Constant(std::abs(m.size)), m.color);
       break;
     case Marker::Type::Box:
-      if (m.size3.allFinite()) draw_box(SE3(Mat3::Identity(), m.a), m.size3.cwiseAbs(), m.color);
+      if (m.size3.allFinite() && is_rotation(m.R))
+        draw_box(SE3(m.R, m.a), m.size3.cwiseAbs(), m.color);
       break;
     case Marker::Type::Line:
       draw_segment(Vec4(m.a.x(), m.a.y(), m.a.z(), 1), Vec4(m.b.x(), m.b.y(), m.b.z(), 1), c,
@@ -674,7 +683,7 @@ int render_to_png(const Model& model, const RenderOptions& opt, const std::strin
     const VecX q = opt.q.size() ? opt.q : VecX(VecX::Zero(model.n));
     forward_kinematics(model, data, opt.base, q);
     Camera cam = opt.camera;
-    if (opt.auto_camera) frame_bodies(model, data.oMb, cam);
+    if (opt.auto_camera) frame_bodies(model, data.oMb, cam, opt.markers);
     Renderer r(cam);
     r.style() = opt.style;
     r.set_model(model);

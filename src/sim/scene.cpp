@@ -62,6 +62,7 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
                                    "base_pose",
                                    "base_twist",
                                    "base_inertia",
+                                   "base_visual",
                                    "initial_positions",
                                    "initial_velocities",
                                    "locked_joints",
@@ -109,6 +110,28 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     } else if (k == "base_twist") {
       const auto t = r.numbers(v, k, 6, 6);
       for (int i = 0; i < 6; ++i) s.base_twist[i] = t[i];
+    } else if (k == "base_visual") {
+      if (!v.is_map()) r.fail(v, "'base_visual' needs {box: [x,y,z], origin: [..], color: [..]}");
+      r.only_keys(v, "base_visual", {"box", "origin", "color"});
+      s.has_base_visual = true;
+      bool has_box = false;
+      for (const auto& p : v.map) {
+        if (p.first == "box") {
+          s.base_visual_box = r.vec3(p.second, "base_visual.box");
+          if (!(s.base_visual_box.minCoeff() > 0)) {
+            r.fail(p.second, "base_visual.box needs three positive extents");
+          }
+          has_box = true;
+        } else if (p.first == "origin") {
+          s.base_visual_origin = r.vec3(p.second, "base_visual.origin");
+        } else {
+          s.base_visual_color = r.vec3(p.second, "base_visual.color");
+          if (!(s.base_visual_color.minCoeff() >= 0 && s.base_visual_color.maxCoeff() <= 1)) {
+            r.fail(p.second, "base_visual.color needs three values in [0, 1]");
+          }
+        }
+      }
+      if (!has_box) r.fail(v, "'base_visual' needs box: [x, y, z]");
     } else if (k == "base_inertia") {
       if (!v.is_map()) r.fail(v, "'base_inertia' needs {mass: m, com: [..], inertia: [..]}");
       r.only_keys(v, "base_inertia", {"mass", "com", "inertia"});

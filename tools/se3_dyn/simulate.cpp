@@ -75,6 +75,15 @@ int cmd_render(int argc, char** argv) {
     const se3::State s = se3::scene_state(scene, model);
     opt.base = s.base;
     opt.q = s.q;
+    if (scene.has_base_visual) {  // drawn on the base link, as the simulator node publishes it
+      se3::render::Marker box;
+      box.type = se3::render::Marker::Type::Box;
+      box.a = s.base.act(scene.base_visual_origin);
+      box.R = s.base.R;
+      box.size3 = scene.base_visual_box;
+      box.color = scene.base_visual_color;
+      opt.markers.push_back(box);
+    }
   } else {
     model = load_model(args);
   }
