@@ -33,6 +33,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/render/raster.h", "render"},
     {"se3_sim/teleop.h", "teleop"},
     {"se3_sim/sim.h", "sim"},
+    {"se3_sim/controllers.h", "sim"},
 };
 
 // What each layer may include: itself and the layers below it.
