@@ -37,6 +37,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/convert.h", "ros"},
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},
+    {"se3_sim/ros/teleop_node.h", "ros"},
 };
 
 // What each layer may include: itself and the layers below it.
