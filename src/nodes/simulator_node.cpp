@@ -504,6 +504,8 @@ class SimulatorNode {
       st.real_time_factor = wall > 0 ? period_steps_ * sim_->dt() / wall : 0.0;
       const double T0 = sim_->initial_kinetic_energy();
       st.energy_drift_rel = finite_or_zero(std::abs(T + U - T0) / std::max(T0, 1e-12));
+      st.energy_balance_rel =
+          finite_or_zero(std::abs(T + U - T0 - sim_->work()) / std::max(T0, 1e-12));
       st.steps = sim_->steps();
       st.rejected_commands = rejected_;
       st.paused = paused_;
