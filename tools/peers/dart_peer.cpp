@@ -106,9 +106,12 @@ void DartRobot::get_state(State& x) const {
   for (int k = 0; k < ours_.nv; ++k) x.v[k] = v[I.map[k]];
 }
 
-void DartRobot::step(double h) {
+bool DartRobot::step(double h) {
   impl_->world->setTimeStep(h);
   impl_->world->step();
+  const Eigen::VectorXd& p = impl_->skel->getPositions();
+  const Eigen::VectorXd& v = impl_->skel->getVelocities();
+  return p.allFinite() && v.allFinite() && v.cwiseAbs().maxCoeff() < 1e6;
 }
 
 MatX DartRobot::mass_matrix() const {
@@ -178,6 +181,10 @@ DartMinvCheck dart_minv_check(const Model& ours, const std::string& urdf_text, c
   for (std::size_t b = 0; b < skel->getNumBodyNodes(); ++b) {
     const auto* body = skel->getBodyNode(b);
     if (body->getParentJoint()->getNumDofs() != 0 || !body->getParentBodyNode()) continue;
+    bool moving_above = false;
+    for (auto* p = body->getParentBodyNode(); p && !moving_above; p = p->getParentBodyNode()) {
+      moving_above = p->getParentJoint()->getNumDofs() != 0;
+    }
     bool moving_below = false;
     for (std::size_t k = 0; k < skel->getNumDofs() && !moving_below; ++k) {
       const auto* child = skel->getDof(k)->getChildBodyNode();
@@ -188,7 +195,7 @@ DartMinvCheck dart_minv_check(const Model& ours, const std::string& urdf_text, c
         }
       }
     }
-    if (moving_below) ++c.welded;
+    if (moving_above && moving_below) ++c.welded;
   }
   return c;
 }

@@ -27,7 +27,9 @@ class DartRobot {
   void set_state(const State& x);
   void get_state(State& x) const;
   /// One World::step of h (semi-implicit Euler: velocities, then positions with the new ones).
-  void step(double h);
+  /// Returns false when the state is no longer finite or a rate exceeds 1e6: DART itself does
+  /// not notice, and its next transform update would stop the program on an assertion.
+  bool step(double h);
   /// DART's own mass matrix and inverse mass matrix at the state set, in our coordinates.
   MatX mass_matrix() const;
   MatX inverse_mass_matrix() const;

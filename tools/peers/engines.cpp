@@ -87,11 +87,7 @@ class DartEngine : public Engine {
  public:
   DartEngine(const Model& m, bool passive) : robot_(m, passive) {}
   void set_state(const State& x) override { robot_.set_state(x); }
-  /// DART reports no failure: a diverging run shows in the state (the runner checks it).
-  bool step(double h) override {
-    robot_.step(h);
-    return true;
-  }
+  bool step(double h) override { return robot_.step(h); }
   void get_state(State& x) override { robot_.get_state(x); }
   int evaluations() const override { return 1; }
 

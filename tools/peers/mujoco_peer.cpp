@@ -18,6 +18,7 @@ namespace {
 
 const char* kFreeJoint = "se3_sim_free";
 const char* kDummyRoot = "se3_sim_world";
+const char* kRenamedRoot = "se3_sim_root";
 
 std::string compiler_element(bool balance) {
   return std::string(
@@ -84,6 +85,12 @@ void write_inertia(mjModel* m, int b, const Inertia& J) {
   m->body_simple[b] = 0;
 }
 
+// MuJoCo's warnings ("Nan, Inf or huge value in QACC", its reset after one) go to stderr, not
+// to the MUJOCO_LOG.TXT it would write into the working directory.
+void warning_to_stderr(const char* msg) {
+  std::fprintf(stderr, "MuJoCo: %s\n", msg);
+}
+
 }  // namespace
 
 std::string strip_geometry(const std::string& urdf) {
@@ -95,6 +102,7 @@ std::string strip_geometry(const std::string& urdf) {
 MujocoRobot::MujocoRobot(const Model& ours, const std::string& urdf_text, const UrdfOptions& opt,
                          const MujocoOptions& mopt)
     : ours_(ours), dof_(ours.nv, -1), qpos_(ours.n + 1, -1), gravity_(ours.gravity) {
+  if (!mju_user_warning) mju_user_warning = warning_to_stderr;
   std::string text = strip_geometry(urdf_text);
   for (const auto& kv : opt.locked) {
     if (kv.second != 0) {
@@ -109,13 +117,21 @@ MujocoRobot::MujocoRobot(const Model& ours, const std::string& urdf_text, const 
   if (robot_end == std::string::npos || close == std::string::npos) {
     throw std::runtime_error("MuJoCo peer: no <robot> element");
   }
+  // MuJoCo's body of link i (a free root named "world" would be MuJoCo's world body: renamed).
+  std::vector<std::string> mj_name(ours.body_name.begin(), ours.body_name.end());
   if (ours.floating) {
     if (!mopt.body_frames && !ours.links.empty() && !ours.links[0].offset.isApprox(SE3(), 0)) {
       throw std::runtime_error("MuJoCo peer: the root link is not the base frame");
     }
-    text.insert(close, std::string("<link name=\"") + kDummyRoot + "\"/><joint name=\"" +
-                           kFreeJoint + "\" type=\"floating\"><parent link=\"" + kDummyRoot +
-                           "\"/><child link=\"" + ours.body_name[0] + "\"/></joint>\n");
+    if (mj_name[0] == "world") {
+      mj_name[0] = kRenamedRoot;
+      static const std::regex world(R"(((?:<link\s+name|\blink)\s*=\s*)(["'])world\2)");
+      text = std::regex_replace(text, world, std::string("$1\"") + kRenamedRoot + "\"");
+    }
+    const std::size_t end = text.rfind("</robot>");
+    text.insert(end, std::string("<link name=\"") + kDummyRoot + "\"/><joint name=\"" + kFreeJoint +
+                         "\" type=\"floating\"><parent link=\"" + kDummyRoot +
+                         "\"/><child link=\"" + mj_name[0] + "\"/></joint>\n");
   }
   static std::atomic<int> counter{0};
   const std::string path =
@@ -180,7 +196,7 @@ MujocoRobot::MujocoRobot(const Model& ours, const std::string& urdf_text, const 
   std::vector<Inertia> want(m_->nbody);
   std::vector<bool> seen(m_->nbody, false);
   for (int i = ours.floating ? 0 : 1; i <= ours.n; ++i) {
-    const int b = mj_name2id(m_, mjOBJ_BODY, ours.body_name[i].c_str());
+    const int b = mj_name2id(m_, mjOBJ_BODY, mj_name[i].c_str());
     const int l = mopt.body_frames ? 0 : ours.link_index(ours.body_name[i]);
     if (b <= 0 || l < 0 || seen[b]) {
       mj_deleteModel(m_);
