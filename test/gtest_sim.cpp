@@ -2,6 +2,7 @@
 // refused with the line), the headless run behind `se3_dyn simulate`, the URDF writer for
 // generated robots, and the Simulator's commands and reset.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -244,7 +245,7 @@ TEST(Scene, TheRobotMayComeFromOutsideAndAJointlessSceneFitsAnyRobot) {
   }
   // The headless run takes the robot from the command line and the rest from the scene.
   SimulateOptions o;
-  o.scene = ::testing::TempDir() + "se3_generic.yaml";
+  o.scene = ::testing::TempDir() + "se3_generic_" + std::to_string(::getpid()) + ".yaml";
   std::ofstream(o.scene) << "base: fixed\ngravity: [0, 0, 0]\ndt: 0.002\n";
   o.model = ur5;
   o.duration = 0.01;

@@ -4,7 +4,9 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <mutex>
 #include <unordered_map>
@@ -69,10 +71,41 @@ urdf::ModelInterfaceSharedPtr parse_with(const std::string& xml,
 
 [[noreturn]] void too_much(const std::string& what, int line) {
   throw ModelError("URDF: " + what + (line > 0 ? " (line " + std::to_string(line) + ")" : "") +
-                   "; see the limits in docs/robustness.md");
+                   "; see docs/robustness.md");
 }
 
 }  // namespace
+
+// Offset of the first byte that is not valid UTF-8 (overlong forms, surrogates and code points
+// past U+10FFFF included), or the text's size when all of it is.
+std::size_t first_invalid_utf8(const std::string& s) {
+  const std::size_t n = s.size();
+  std::size_t i = 0;
+  while (i < n) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    const std::size_t len = c >= 0xC2 && c <= 0xDF   ? 2
+                            : c >= 0xE0 && c <= 0xEF ? 3
+                            : c >= 0xF0 && c <= 0xF4 ? 4
+                                                     : 0;
+    if (len == 0 || i + len > n) return i;
+    unsigned long cp = c & (0x7Fu >> len);
+    for (std::size_t k = 1; k < len; ++k) {
+      const auto b = static_cast<unsigned char>(s[i + k]);
+      if ((b & 0xC0) != 0x80) return i;
+      cp = (cp << 6) | (b & 0x3Fu);
+    }
+    if ((len == 3 && cp < 0x800) || (len == 4 && (cp < 0x10000 || cp > 0x10FFFF)) ||
+        (cp >= 0xD800 && cp <= 0xDFFF)) {
+      return i;
+    }
+    i += len;
+  }
+  return n;
+}
 
 XmlShape xml_shape(const std::string& s) {
   XmlShape shape;
@@ -150,10 +183,12 @@ XmlShape xml_shape(const std::string& s) {
         shape.max_attributes = attributes;
         shape.max_attributes_line = tag_line;
       }
-      if (open && ++depth > shape.max_depth) {
-        shape.max_depth = depth;
+      // tinyxml parses an empty element one level down too, so it counts as a level.
+      if (depth + 1 > shape.max_depth) {
+        shape.max_depth = depth + 1;
         shape.max_depth_line = tag_line;
       }
+      if (open) ++depth;
     } else {
       // "<?...>" (tinyxml reads the declaration's quoted values: stopping at the first '>'
       // skips no more than it does), "<!DOCTYPE ...>" and other unknown tags end at '>'.
@@ -169,6 +204,15 @@ void check_urdf_text(const std::string& xml) {
     too_much(std::to_string(xml.size()) + " bytes, more than the " +
                  std::to_string(limits::kMaxUrdfBytes) + " a URDF may have",
              0);
+  }
+  // tinyxml reads a UTF-8 lead byte and the next one to three bytes as one character, whatever
+  // they are: a '<' or the end of the text. Valid UTF-8 has only continuation bytes there.
+  const std::size_t bad = first_invalid_utf8(xml);
+  if (bad < xml.size()) {
+    char byte[8];
+    std::snprintf(byte, sizeof byte, "0x%02x", static_cast<unsigned char>(xml[bad]));
+    too_much(std::string("byte ") + byte + " is not UTF-8 (XML text is UTF-8)",
+             1 + static_cast<int>(std::count(xml.begin(), xml.begin() + bad, '\n')));
   }
   const XmlShape shape = xml_shape(xml);
   if (shape.max_depth > limits::kMaxXmlDepth) {

@@ -1,16 +1,51 @@
 // SceneReader (scene_reader.h): the limits pass over scene text, yaml-cpp, typed values.
 #include "scene_reader.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 #include <unordered_set>
 
 #include "se3_sim/limits.h"
 
 namespace se3 {
 namespace {
+
+// Offset of the first byte that is not valid UTF-8 (overlong forms, surrogates and code points
+// past U+10FFFF included), or the text's size when all of it is.
+std::size_t invalid_utf8_at(const std::string& s) {
+  const std::size_t n = s.size();
+  std::size_t i = 0;
+  while (i < n) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    const std::size_t len = c >= 0xC2 && c <= 0xDF   ? 2
+                            : c >= 0xE0 && c <= 0xEF ? 3
+                            : c >= 0xF0 && c <= 0xF4 ? 4
+                                                     : 0;
+    if (len == 0 || i + len > n) return i;
+    unsigned long cp = c & (0x7Fu >> len);
+    for (std::size_t k = 1; k < len; ++k) {
+      const auto b = static_cast<unsigned char>(s[i + k]);
+      if ((b & 0xC0) != 0x80) return i;
+      cp = (cp << 6) | (b & 0x3Fu);
+    }
+    if ((len == 3 && cp < 0x800) || (len == 4 && (cp < 0x10000 || cp > 0x10FFFF)) ||
+        (cp >= 0xD800 && cp <= 0xDFFF)) {
+      return i;
+    }
+    i += len;
+  }
+  return n;
+}
 
 // A value or key quoted in a message: one line, at most 60 characters.
 std::string shown(const std::string& s) {
@@ -25,6 +60,29 @@ std::string shown(const std::string& s) {
   }
   return out;
 }
+
+// Where each document starts (the first two); every other event is ignored.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark& m) override {
+    if (count < 2) mark[count] = m;
+    ++count;
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+  int count = 0;
+  YAML::Mark mark[2];
+};
 
 int line_of(const YAML::Node& n, int fallback) {
   if (!n || n.IsNull()) return fallback;
@@ -58,6 +116,13 @@ class TextLimits {
       throw SceneError(file_ + ": " + std::to_string(s_.size()) + " bytes, more than the " +
                        std::to_string(limits::kMaxSceneBytes) +
                        " a scene may have (docs/robustness.md)");
+    }
+    const size_t bad = invalid_utf8_at(s_);
+    if (bad < s_.size() && throwing) {
+      throw SceneError(file_ + ":" +
+                       std::to_string(1 + std::count(s_.begin(), s_.begin() + bad, '\n')) +
+                       ": byte " + std::to_string(static_cast<unsigned char>(s_[bad])) +
+                       " is not UTF-8 (YAML text is UTF-8)");
     }
     size_t i = 0;
     if (s_.compare(0, 3, "\xEF\xBB\xBF") == 0) i = 3;  // a UTF-8 byte order mark
@@ -258,25 +323,41 @@ SceneReader::Field SceneReader::document(const std::string& text) const {
       lf += '\n';
     }
   }
-  std::vector<YAML::Node> docs;
+  YAML::Node doc;
   try {
-    docs = YAML::LoadAll(lf);
+    // First count the documents (at most two) without building nodes: yaml-cpp 0.7 returns the
+    // same empty document forever from a text that starts with ',' (YAML::LoadAll never ends),
+    // so a document that starts where the one before it started is refused.
+    std::istringstream in(lf);
+    YAML::Parser parser(in);
+    DocumentStarts starts;
+    while (starts.count < 2 && parser.HandleNextDocument(starts)) {
+    }
+    if (starts.count == 2) {
+      const YAML::Mark& m = starts.mark[0];
+      if (starts.mark[1].pos == m.pos) {
+        const std::string at = m.pos >= 0 && static_cast<size_t>(m.pos) < lf.size()
+                                   ? shown(lf.substr(static_cast<size_t>(m.pos), 1))
+                                   : std::string("?");
+        fail(m.line + 1, "'" + at + "' cannot start a YAML document (column " +
+                             std::to_string(m.column + 1) + ")");
+      }
+      fail(starts.mark[1].line + 1, "a scene is one YAML document ('---' starts a second one)");
+    }
+    doc = YAML::Load(lf);
   } catch (const YAML::Exception& e) {
     const int line = e.mark.is_null() ? 0 : e.mark.line + 1;
     fail(line,
          e.msg + (e.mark.is_null() ? "" : " (column " + std::to_string(e.mark.column + 1) + ")"));
   }
-  if (docs.size() > 1) {
-    fail(line_of(docs[1], 0), "a scene is one YAML document ('---' starts a second one)");
-  }
   Field root;
   root.line = 1;
-  if (docs.empty() || docs[0].IsNull()) {
+  if (!doc || doc.IsNull()) {
     root.node = YAML::Node(YAML::NodeType::Map);
     return root;
   }
-  root.node = docs[0];
-  root.line = line_of(docs[0], 1);
+  root.node = doc;
+  root.line = line_of(doc, 1);
   if (!root.node.IsMap()) fail(root.line, "the top level of a scene must be a map of keys");
   return root;
 }
