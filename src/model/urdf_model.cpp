@@ -104,8 +104,11 @@ struct Builder {
     return found ? it->second : 0.0;
   }
 
-  void add_link_data(const urdf::Link& link, int body, const SE3& O) {
-    m.links.push_back({link.name, body, O});
+  // parent: index in m.links of the URDF parent link (-1 for the root), j the joint from it.
+  void add_link_data(const urdf::Link& link, int body, const SE3& O, int parent,
+                     const urdf::Joint* j) {
+    m.links.push_back({link.name, body, O, parent, j ? j->name : std::string(),
+                       j && j->type == urdf::Joint::FIXED});
     if (link.inertial) add_inertial(link, body, O);
     auto add_geoms = [&](const auto& arr, const auto& single, std::vector<Geometry>& dst,
                          std::vector<int>& dst_body, bool visual) {
@@ -177,21 +180,26 @@ struct Builder {
 
   // Depth-first, children in URDF order: a body's subtree is contiguous, and parent[i] < i.
   // An explicit stack instead of recursion: a chain of thousands of links overflowed the call
-  // stack. Each entry is a link being visited and the next of its child joints to take.
+  // stack. Each entry is a link being visited, its index in m.links and the next of its child
+  // joints to take.
   struct Visit {
     const urdf::Link* link;
     int body;
     SE3 O;
+    int self;
     size_t next = 0;
   };
 
   void visit(const urdf::Link& root, int root_body, const SE3& root_O) {
     std::vector<Visit> stack;
-    auto enter = [&](const urdf::Link& link, int body, const SE3& O) {
-      add_link_data(link, body, O);
-      stack.push_back({&link, body, O});
+    // parent: index in m.links of the URDF parent link (-1 for the root), from the joint to it.
+    auto enter = [&](const urdf::Link& link, int body, const SE3& O, int parent,
+                     const urdf::Joint* from) {
+      const int self = static_cast<int>(m.links.size());
+      add_link_data(link, body, O, parent, from);
+      stack.push_back({&link, body, O, self});
     };
-    enter(root, root_body, root_O);
+    enter(root, root_body, root_O, -1, nullptr);
     while (!stack.empty()) {
       Visit& top = stack.back();
       if (top.next == top.link->child_joints.size()) {
@@ -200,7 +208,7 @@ struct Builder {
       }
       const urdf::JointSharedPtr& jp = top.link->child_joints[top.next++];
       const urdf::Joint* j = jp.get();
-      const int body = top.body;
+      const int body = top.body, self = top.self;
       const SE3 O = top.O;  // copies: enter() may move the stack
       const urdf::LinkConstSharedPtr child = urdf.getLink(j->child_link_name);
       if (!child) throw ModelError("joint '" + j->name + "': child link missing");
@@ -210,7 +218,7 @@ struct Builder {
       const double ql = locked_position(j->name, is_locked);
       switch (j->type) {
         case urdf::Joint::FIXED:
-          enter(*child, body, T);
+          enter(*child, body, T, self, j);
           break;
         case urdf::Joint::REVOLUTE:
         case urdf::Joint::CONTINUOUS:
@@ -223,14 +231,14 @@ struct Builder {
           if (is_locked) {
             const SE3 motion = prismatic ? SE3(Mat3::Identity(), ql * axis)
                                          : SE3(exp_so3(ql * axis), Vec3::Zero());
-            enter(*child, body, T * motion);
+            enter(*child, body, T * motion, self, j);
             break;
           }
           const Mat3 Ra = frame_with_z(axis);
           const int i = m.n + 1;
           add_body(body, T * SE3(Ra, Vec3::Zero()),
                    prismatic ? JointType::Prismatic : JointType::Revolute, *j);
-          enter(*child, i, SE3(Ra.transpose(), Vec3::Zero()));
+          enter(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j);
           break;
         }
         case urdf::Joint::FLOATING:

@@ -138,7 +138,17 @@ void read_integrator(const SceneReader& r, const Field& v, Scene& s) {
   }
 }
 
-// The top-level keys and what reads each. A later key (objects, controllers) is one more row.
+// ros_control's YAML shape (controllers.h): parse_controllers names the file, line, controller
+// and key itself.
+void read_controllers(const SceneReader& r, const Field& v, Scene& s) {
+  try {
+    s.controllers = parse_controllers(v.node, {}, r.file());
+  } catch (const ControllerError& e) {
+    throw SceneError(e.what());
+  }
+}
+
+// The top-level keys and what reads each. A later key (objects, ...) is one more row.
 using KeyReader = void (*)(const SceneReader&, const Field&, Scene&);
 const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
   static const std::vector<std::pair<const char*, KeyReader>> keys = {
@@ -187,6 +197,7 @@ const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
       {"friction_eps",
        [](const SceneReader& r, const Field& v, Scene& s) { s.friction_eps = r.positive(v); }},
       {"chain", read_chain},
+      {"controllers", read_controllers},
   };
   return keys;
 }
