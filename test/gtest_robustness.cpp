@@ -489,6 +489,23 @@ TEST(BoundedWork, AbsurdStepCountsAreRefusedBeforeTheRun) {
   o.model = "chain:100001";
   EXPECT_NE(error_of<std::invalid_argument>([&] { simulate_headless(o); }).find("100000"),
             std::string::npos);
+  // An adaptive stepper's internal steps count too: a run that needs many per step stops at
+  // the limit (here lowered) and says so.
+  SimulateOptions a;
+  a.model = "chain:3";
+  a.integrator = "rkmk45";
+  a.tol = 1e-12;
+  a.dt = 0.1;
+  a.duration = 10;
+  a.max_body_steps = 2000;
+  const SimulateResult stopped = simulate_headless(a);
+  EXPECT_TRUE(stopped.stopped);
+  EXPECT_FALSE(stopped.diverged);
+  EXPECT_LT(stopped.sim_s, 10.0);
+  EXPECT_NE(stopped.status.find("internal steps of 4 bodies passed the 2e+03 body-steps"),
+            std::string::npos)
+      << stopped.status;
+  EXPECT_NE(simulate_result_json(stopped).find("\"status\": \"stopped at t = "), std::string::npos);
   // The same dt in a scene.
   EXPECT_NE(error_of<SceneError>([&] {
               parse_scene("dt: 1e-300\n", kScenes, "dt.yaml");

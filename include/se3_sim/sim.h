@@ -13,6 +13,7 @@
 #include "se3_sim/constraints.h"
 #include "se3_sim/controllers.h"
 #include "se3_sim/integrate.h"
+#include "se3_sim/limits.h"
 
 namespace se3 {
 
@@ -325,6 +326,8 @@ struct SimulateOptions {
   bool has_gravity = false;     ///< override gravity with `gravity`
   Vec3 gravity = Vec3(0, 0, -9.81);
   std::string out_csv;  ///< trajectory file ("" = none): t, base pose and twist, q:, v:, E
+  /// Most body-steps (steps x bodies; an adaptive stepper's internal steps count) of the run.
+  double max_body_steps = limits::kMaxBodySteps;
 };
 
 /// The figures `se3_dyn simulate --json` prints. NaN where a figure does not apply (print null).
@@ -346,7 +349,9 @@ struct SimulateResult {
   double com_drift_max = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t substeps = 0, rejected = 0, evaluations = 0;
   bool diverged = false;
-  std::string status;  ///< the divergence reason ("" when the run completed)
+  /// The run was stopped at SimulateOptions::max_body_steps (adaptive internal steps).
+  bool stopped = false;
+  std::string status;  ///< why the run ended early ("" when it completed)
 };
 
 /// Runs a scene or model headless with zero commanded torques (a model and a scene together: the
@@ -355,7 +360,7 @@ struct SimulateResult {
 /// built or stepped); a divergence ends the run early with diverged = true.
 SimulateResult simulate_headless(const SimulateOptions& options);
 /// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null), and
-/// "diverged" (true/false) and "status" (the divergence reason, or null).
+/// "diverged" (true/false) and "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);
 
 }  // namespace se3

@@ -103,9 +103,10 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   }
 
   Model model = scene_model(scene);
-  if (steps_asked * (model.n + 1) > limits::kMaxBodySteps) {
+  const double bodies = model.n + 1;
+  if (steps_asked * bodies > o.max_body_steps) {
     throw std::invalid_argument(figure(steps_asked) + " steps of " + std::to_string(model.n + 1) +
-                                " bodies are more than the " + figure(limits::kMaxBodySteps) +
+                                " bodies are more than the " + figure(o.max_body_steps) +
                                 " body-steps one run may take (docs/robustness.md)");
   }
   const State x0 = use_scene_state ? scene_state(scene, model) : random_state(model, o.seed);
@@ -145,6 +146,15 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     if (!ok) {
       r.diverged = true;
       r.status = sim.failure();
+      break;
+    }
+    // An adaptive stepper may take many internal steps per step: they count as work too.
+    if (static_cast<double>(sim.substeps() + sim.rejected()) * bodies > o.max_body_steps) {
+      r.stopped = true;
+      r.status = "stopped at t = " + figure(sim.time()) + " s: the adaptive stepper's " +
+                 std::to_string(sim.substeps() + sim.rejected()) + " internal steps of " +
+                 std::to_string(static_cast<long long>(bodies)) + " bodies passed the " +
+                 figure(o.max_body_steps) + " body-steps one run may take (docs/robustness.md)";
       break;
     }
     // Diagnostics every step, outside the timed part.
@@ -207,7 +217,7 @@ std::string simulate_result_json(const SimulateResult& r) {
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max)
     << ", \"diverged\": " << (r.diverged ? "true" : "false")
-    << ", \"status\": " << (r.diverged ? text(r.status) : std::string("null")) << "}";
+    << ", \"status\": " << (r.status.empty() ? std::string("null") : text(r.status)) << "}";
   return o.str();
 }
 

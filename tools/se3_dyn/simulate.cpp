@@ -64,6 +64,11 @@ int cmd_simulate(int argc, char** argv) {
                  static_cast<unsigned long long>(r.steps), r.status.c_str());
     return 1;
   }
+  if (r.stopped) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "se3_dyn: %s\n", r.status.c_str());
+    return 1;
+  }
   return 0;
 }
 
