@@ -362,6 +362,19 @@ TEST(SceneDepth, DeepNestingIsRefusedBeforeYamlCppParses) {
                                            "deep.yaml:3: lists and maps nested more than 64"),
                 ::testing::ExitedWithCode(0), "");
   }
+  // A tag or anchor ends at a flow indicator: "!t[[[..." is a tag, then the lists (the bound
+  // skipped them as part of the tag; found by fuzz_scene's cross-check with yaml-cpp).
+  for (const char* prefix : {"!t", "&a", "!!str"}) {
+    SCOPED_TRACE(prefix);
+    std::string text = std::string("robot: chain:2\ngravity: ") + prefix;
+    for (int i = 0; i < 2000; ++i) text += "[";
+    for (int i = 0; i < 2000; ++i) text += "]";
+    EXPECT_NE(error_of<SceneError>([&] {
+                parse_scene(text, kScenes, "tag.yaml");
+              }).find("tag.yaml:2: lists and maps nested more than 64"),
+              std::string::npos)
+        << error_of<SceneError>([&] { parse_scene(text, kScenes, "tag.yaml"); });
+  }
   // Block nesting by indentation, one level per line.
   std::string block = "robot: chain:2\n";
   for (int i = 0; i < 200; ++i) block += std::string(i, ' ') + "k" + std::to_string(i) + ":\n";

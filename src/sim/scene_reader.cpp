@@ -278,7 +278,11 @@ class TextLimits {
         return;
       }
       if (node_start && (c == '&' || c == '!')) {  // an anchor or tag before the node
-        while (k + 1 < e && s_[k + 1] != ' ' && s_[k + 1] != '\t') ++k;
+        // It ends at a blank or a flow indicator (neither may be in its name).
+        while (k + 1 < e && s_[k + 1] != ' ' && s_[k + 1] != '\t' && s_[k + 1] != '[' &&
+               s_[k + 1] != ']' && s_[k + 1] != '{' && s_[k + 1] != '}' && s_[k + 1] != ',') {
+          ++k;
+        }
         continue;
       }
       if (node_start) owner = col;
@@ -303,6 +307,19 @@ void check_scene_text(const std::string& text, const std::string& file) {
   TextLimits(text, file).run();
 }
 
+std::string with_lf_line_ends(const std::string& text) {
+  std::string lf;
+  lf.reserve(text.size());
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '\r') {
+      lf += text[i];
+    } else if (i + 1 >= text.size() || text[i + 1] != '\n') {
+      lf += '\n';
+    }
+  }
+  return lf;
+}
+
 SceneTextShape scene_text_shape(const std::string& text) {
   const std::string file;
   TextLimits t(text, file);
@@ -313,16 +330,7 @@ SceneTextShape scene_text_shape(const std::string& text) {
 
 SceneReader::Field SceneReader::document(const std::string& text) const {
   check_scene_text(text, file_);
-  // Line ends as YAML defines them (LF, CRLF, CR alone), as LF: yaml-cpp reads CR alone as text.
-  std::string lf;
-  lf.reserve(text.size());
-  for (size_t i = 0; i < text.size(); ++i) {
-    if (text[i] != '\r') {
-      lf += text[i];
-    } else if (i + 1 >= text.size() || text[i + 1] != '\n') {
-      lf += '\n';
-    }
-  }
+  const std::string lf = with_lf_line_ends(text);
   YAML::Node doc;
   try {
     // First count the documents (at most two) without building nodes: yaml-cpp 0.7 returns the

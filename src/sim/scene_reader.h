@@ -39,6 +39,10 @@ struct SceneTextShape {
 };
 SceneTextShape scene_text_shape(const std::string& text);
 
+/// The text with YAML's line ends (LF, CRLF, CR alone) as LF: what yaml-cpp is given (it reads a
+/// CR alone as text).
+std::string with_lf_line_ends(const std::string& text);
+
 class SceneReader {
  public:
   /// One value of the scene: its key path for messages, the YAML node and its line.
