@@ -50,7 +50,7 @@ void check_shape(const std::string& text) {
   YAML::Node doc;
   try {
     se3::check_scene_text(text, "fuzz.yaml");
-    doc = YAML::Load(text);
+    doc = YAML::Load(se3::with_lf_line_ends(text));
   } catch (const std::exception&) {
     return;
   }

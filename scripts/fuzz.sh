@@ -25,7 +25,8 @@ if ((${#targets[@]} == 0)); then
 fi
 ((build)) && bash "$repo/scripts/sanitize.sh" --no-gtests --no-fuzz
 bin="$repo/.build/san/ws/devel/lib/se3_sim"
-declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes")
+declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes"
+  [controllers]="config/controllers")
 export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export LSAN_OPTIONS="suppressions=$repo/fuzz/lsan.supp:print_suppressions=0"
@@ -40,12 +41,13 @@ for name in "${targets[@]}"; do
         -max_total_time="$seconds")
   [[ -f "$repo/fuzz/$name.dict" ]] && opts+=(-dict="$repo/fuzz/$name.dict")
   log="$repo/.build/san/fuzz-$name.log"
+  touch "$log.start"  # findings are the artifacts newer than this
   # -fork runs inputs in child processes and goes on after a finding (-ignore_crashes etc.),
   # so one campaign reports every distinct problem instead of stopping at the first.
   nice -n 10 "$bin/fuzz_$name" "${opts[@]}" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 \
     -ignore_ooms=1 "${dirs[@]}" > "$log" 2>&1 || true
   runs=$(grep -oE '#[0-9]+' "$log" | tail -1 | tr -d '#' || true)
-  count() { find "$art" -name "$1-*" | wc -l; }
+  count() { find "$art" -name "$1-*" -newer "$log.start" | wc -l; }
   printf '%-8s %12s %8s %8s %8s %8s  %s\n' "$name" "${runs:-?}" "$(count crash)" "$(count leak)" \
     "$(count timeout)" "$(count oom)" "$(find "$corpus" -type f | wc -l) inputs"
 done

@@ -47,7 +47,8 @@ fuzzers=()
 for f in "$repo"/fuzz/fuzz_*.cpp; do fuzzers+=("$(basename "$f" .cpp)"); done
 # Seed corpora: fuzz/corpus/NAME (small inputs and every crasher found), and the project's own
 # files of that kind.
-declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes")
+declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes"
+  [controllers]="config/controllers")
 
 t0=$(date +%s)
 echo "se3_sim: sanitizer build (clang, ASan + UBSan) in .build/san (log: .build/san/build.log)"
