@@ -14,6 +14,8 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
 if [[ "${1:-}" == "--test" ]]; then
   pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
     ros-robot-state-publisher libmujoco-dev valgrind)
+  # the sanitizer build and the fuzz targets (scripts/sanitize.sh)
+  pkgs+=(clang libclang-rt-14-dev llvm libtinyxml-dev)
 fi
 missing=()
 for p in "${pkgs[@]}"; do

@@ -25,6 +25,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/lie.h", "lie"},
     {"lie/simd.h", "lie"},
     {"se3_sim/model.h", "model"},
+    {"se3_sim/limits.h", "model"},
     {"se3_sim/dynamics.h", "dynamics"},
     {"se3_sim/constraints.h", "dynamics"},
     {"se3_sim/integrate.h", "integrate"},

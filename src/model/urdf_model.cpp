@@ -1,6 +1,5 @@
 // URDF -> Model: fixed joints merged into their parent body, moving joints turned so that
 // their axis is the body's z axis (the paper's eq. (26) S_j = e_z).
-#include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Cholesky>
@@ -9,25 +8,18 @@
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <mutex>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
+#include "se3_sim/limits.h"
 #include "se3_sim/model.h"
+#include "urdf_guard.h"
 
 namespace se3 {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Collects urdfdom's console_bridge messages so a rejection becomes one clear line.
-class CaptureHandler : public console_bridge::OutputHandler {
- public:
-  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty())
-      first_error = text;
-  }
-  std::string first_error;
-};
 
 SE3 to_se3(const urdf::Pose& p) {
   double x, y, z, w;
@@ -104,15 +96,12 @@ struct Builder {
     ++m.n;
   }
 
+  std::unordered_map<std::string, double> locked;  ///< opt.locked, looked up per joint
+
   double locked_position(const std::string& joint, bool& found) const {
-    for (const auto& kv : opt.locked) {
-      if (kv.first == joint) {
-        found = true;
-        return kv.second;
-      }
-    }
-    found = false;
-    return 0;
+    const auto it = locked.find(joint);
+    found = it != locked.end();
+    return found ? it->second : 0.0;
   }
 
   // parent: index in m.links of the URDF parent link (-1 for the root), j the joint from it.
@@ -189,21 +178,47 @@ struct Builder {
     m.inertia[body] += Inertia::from_com(mass, Tc.p, I_body);
   }
 
-  // Depth-first: a body's subtree is contiguous, and parent[i] < i.
-  void visit(const urdf::Link& link, int body, const SE3& O, int parent_link = -1,
-             const urdf::Joint* from = nullptr) {
-    const int self = static_cast<int>(m.links.size());
-    add_link_data(link, body, O, parent_link, from);
-    for (const auto& j : link.child_joints) {
+  // Depth-first, children in URDF order: a body's subtree is contiguous, and parent[i] < i.
+  // An explicit stack instead of recursion: a chain of thousands of links overflowed the call
+  // stack. Each entry is a link being visited, its index in m.links and the next of its child
+  // joints to take.
+  struct Visit {
+    const urdf::Link* link;
+    int body;
+    SE3 O;
+    int self;
+    size_t next = 0;
+  };
+
+  void visit(const urdf::Link& root, int root_body, const SE3& root_O) {
+    std::vector<Visit> stack;
+    // parent: index in m.links of the URDF parent link (-1 for the root), from the joint to it.
+    auto enter = [&](const urdf::Link& link, int body, const SE3& O, int parent,
+                     const urdf::Joint* from) {
+      const int self = static_cast<int>(m.links.size());
+      add_link_data(link, body, O, parent, from);
+      stack.push_back({&link, body, O, self});
+    };
+    enter(root, root_body, root_O, -1, nullptr);
+    while (!stack.empty()) {
+      Visit& top = stack.back();
+      if (top.next == top.link->child_joints.size()) {
+        stack.pop_back();
+        continue;
+      }
+      const urdf::JointSharedPtr& jp = top.link->child_joints[top.next++];
+      const urdf::Joint* j = jp.get();
+      const int body = top.body, self = top.self;
+      const SE3 O = top.O;  // copies: enter() may move the stack
       const urdf::LinkConstSharedPtr child = urdf.getLink(j->child_link_name);
       if (!child) throw ModelError("joint '" + j->name + "': child link missing");
       const SE3 T = O * to_se3(j->parent_to_joint_origin_transform);
       Vec3 axis(j->axis.x, j->axis.y, j->axis.z);
-      bool locked = false;
-      const double ql = locked_position(j->name, locked);
+      bool is_locked = false;
+      const double ql = locked_position(j->name, is_locked);
       switch (j->type) {
         case urdf::Joint::FIXED:
-          visit(*child, body, T, self, j.get());
+          enter(*child, body, T, self, j);
           break;
         case urdf::Joint::REVOLUTE:
         case urdf::Joint::CONTINUOUS:
@@ -213,17 +228,17 @@ struct Builder {
           }
           axis.normalize();
           const bool prismatic = j->type == urdf::Joint::PRISMATIC;
-          if (locked) {
+          if (is_locked) {
             const SE3 motion = prismatic ? SE3(Mat3::Identity(), ql * axis)
                                          : SE3(exp_so3(ql * axis), Vec3::Zero());
-            visit(*child, body, T * motion, self, j.get());
+            enter(*child, body, T * motion, self, j);
             break;
           }
           const Mat3 Ra = frame_with_z(axis);
           const int i = m.n + 1;
           add_body(body, T * SE3(Ra, Vec3::Zero()),
                    prismatic ? JointType::Prismatic : JointType::Revolute, *j);
-          visit(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j.get());
+          enter(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j);
           break;
         }
         case urdf::Joint::FLOATING:
@@ -239,38 +254,26 @@ struct Builder {
   }
 };
 
-std::mutex g_console_mutex;
-
 }  // namespace
 
 Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
-  urdf::ModelInterfaceSharedPtr u;
+  check_urdf_text(xml);  // urdf_guard.h: size and nesting before tinyxml recurses
   std::string err;
-  {
-    std::lock_guard<std::mutex> lock(g_console_mutex);
-    CaptureHandler h;
-    console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
-    console_bridge::useOutputHandler(&h);
-    try {
-      u = urdf::parseURDF(xml);
-    } catch (const std::exception& e) {
-      h.first_error = e.what();
-    }
-    console_bridge::useOutputHandler(previous);
-    err = h.first_error;
-  }
-  if (!u) {
-    throw ModelError("URDF rejected by urdfdom: " +
-                     (err.empty() ? std::string("parse error") : err));
-  }
+  std::vector<std::string> complaints;
+  urdf::ModelInterfaceSharedPtr u = parse_urdf(xml, err, &complaints);
+  if (!u) throw ModelError("URDF rejected by urdfdom: " + err);
+  const UrdfRelease release(u);
+  check_urdf_joints(*u);
   const urdf::LinkConstSharedPtr root = u->getRoot();
   if (!root) throw ModelError("URDF has no root link");
 
-  Builder b{*u, opt, Model{}};
+  Builder b{*u, opt, Model{}, {}};
+  for (const auto& kv : opt.locked) b.locked.emplace(kv.first, kv.second);
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
   m.start_with_base(root->name);
+  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
   b.visit(*root, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).
@@ -294,11 +297,21 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
 }
 
 Model model_from_urdf_file(const std::string& path, const UrdfOptions& opt) {
-  std::ifstream f(path);
+  std::ifstream f(path, std::ios::binary);
   if (!f) throw ModelError("cannot read URDF file '" + path + "'");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return model_from_urdf_string(ss.str(), opt);
+  // Read in pieces, so that a huge file or a device (/dev/zero) stops at the size limit.
+  std::string text;
+  char buf[1 << 16];
+  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+    text.append(buf, static_cast<size_t>(f.gcount()));
+    if (text.size() > limits::kMaxUrdfBytes) {
+      throw ModelError("URDF file '" + path + "': more than the " +
+                       std::to_string(limits::kMaxUrdfBytes) +
+                       " bytes a URDF may have; see the limits in docs/robustness.md");
+    }
+  }
+  if (f.bad()) throw ModelError("cannot read URDF file '" + path + "'");
+  return model_from_urdf_string(text, opt);
 }
 
 }  // namespace se3

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <set>
 
+#include "scene_reader.h"
+
 namespace se3 {
 
 // ------------------------------------------------------------------ Pid
@@ -267,7 +269,10 @@ std::vector<ControllerSpec> parse_controllers_text(const std::string& yaml_text,
                                                    const std::string& where) {
   YAML::Node root;
   try {
+    check_scene_text(yaml_text, where);  // size and nesting before yaml-cpp (scene_reader.h)
     root = YAML::Load(yaml_text);
+  } catch (const SceneError& e) {
+    throw ControllerError(e.what());
   } catch (const YAML::Exception& e) {
     throw ControllerError(where + ": " + e.what());
   }

@@ -13,13 +13,11 @@ int cmd_simulate(int argc, char** argv) {
   const Args args(argc, argv, 2, {"floating", "json", "random"},
                   {"scene", "integrator", "dt", "duration", "tol", "seed", "gravity", "out"});
   se3::SimulateOptions o;
-  if (args.has("scene")) {
-    if (!args.positional.empty()) throw UsageError("give either MODEL.urdf or --scene, not both");
-    o.scene = args.get("scene");
-  } else {
-    if (args.positional.size() != 1) throw UsageError("expected MODEL.urdf or --scene SCENE.yaml");
-    o.model = args.positional[0];
+  if (args.positional.size() > 1 || (args.positional.empty() && !args.has("scene"))) {
+    throw UsageError("expected MODEL.urdf, --scene SCENE.yaml, or both");
   }
+  o.scene = args.get("scene");
+  if (!args.positional.empty()) o.model = args.positional[0];  // replaces the scene's robot
   if (!args.has("duration")) throw UsageError("--duration T is required");
   o.floating = args.has("floating");
   o.integrator = args.get("integrator");
@@ -60,7 +58,18 @@ int cmd_simulate(int argc, char** argv) {
         fig(r.constraint_error_max).c_str());
     if (r.diverged) std::printf("diverged: %s\n", r.status.c_str());
   }
-  return r.diverged ? 1 : 0;
+  if (r.diverged) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "se3_dyn: the run diverged at t = %.6g s (step %llu): %s\n", r.sim_s,
+                 static_cast<unsigned long long>(r.steps), r.status.c_str());
+    return 1;
+  }
+  if (r.stopped) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "se3_dyn: %s\n", r.status.c_str());
+    return 1;
+  }
+  return 0;
 }
 
 int cmd_render(int argc, char** argv) {
