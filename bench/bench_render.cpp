@@ -30,6 +30,7 @@ std::string robots_dir() {
 
 struct Scene {
   Model model;
+  GeometryModel geometry;
   std::vector<SE3> oMb;
   render::Camera cam;
 };
@@ -37,6 +38,9 @@ struct Scene {
 Scene load(const std::string& file) {
   Scene s;
   s.model = model_from_urdf_file(robots_dir() + "/" + file);
+  GeometryOptions go;
+  go.paths.package_path = {robots_dir() + "/../meshes"};
+  s.geometry = geometry_from_urdf_file(s.model, robots_dir() + "/" + file, go);
   Data data(s.model);
   VecX q = VecX::Zero(s.model.n);
   // A bent, readable pose: every other joint turned.
@@ -52,7 +56,7 @@ Scene load(const std::string& file) {
   }
   forward_kinematics(s.model, data, SE3(), q);
   s.oMb = data.oMb;
-  render::frame_bodies(s.model, s.oMb, s.cam);
+  render::frame_items(render::make_draw_items(s.model, s.geometry), s.oMb, s.cam);
   return s;
 }
 
@@ -65,7 +69,7 @@ void BM_RenderFrame(benchmark::State& state, const std::string& file) {
     return;
   }
   render::Renderer r(s.cam);
-  r.set_model(s.model);
+  r.set_model(s.model, s.geometry);
   render::Overlay ov;
   ov.sim_time = 12.345;
   ov.real_time_factor = 1.0;
@@ -96,7 +100,7 @@ int save_png(const std::string& path) {
   cam.target = Vec3(0.25, 0.0, 0.42);
   cam.update();
   render::Renderer r(cam);
-  r.set_model(s.model);
+  r.set_model(s.model, s.geometry);
   r.style().frames = false;
   render::Overlay ov;
   ov.sim_time = 3.250;

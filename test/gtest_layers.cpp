@@ -25,6 +25,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/lie.h", "lie"},
     {"lie/simd.h", "lie"},
     {"se3_sim/model.h", "model"},
+    {"se3_sim/geometry.h", "geometry"},
     {"se3_sim/dynamics.h", "dynamics"},
     {"se3_sim/constraints.h", "dynamics"},
     {"se3_sim/integrate.h", "integrate"},
@@ -39,11 +40,12 @@ const std::map<std::string, std::string> kHeaderLayer = {
 const std::map<std::string, std::set<std::string>> kAllowed = {
     {"lie", {"lie"}},
     {"model", {"lie", "model"}},
-    {"dynamics", {"lie", "model", "dynamics"}},
-    {"integrate", {"lie", "model", "dynamics", "integrate"}},
-    {"render", {"lie", "model", "dynamics", "render"}},
+    {"geometry", {"lie", "model", "geometry"}},
+    {"dynamics", {"lie", "model", "geometry", "dynamics"}},
+    {"integrate", {"lie", "model", "geometry", "dynamics", "integrate"}},
+    {"render", {"lie", "model", "geometry", "dynamics", "render"}},
     {"teleop", {"lie", "model", "teleop"}},
-    {"sim", {"lie", "model", "dynamics", "integrate", "sim"}},
+    {"sim", {"lie", "model", "geometry", "dynamics", "integrate", "sim"}},
 };
 
 // The files of a layer: its public headers and src/<layer>/.

@@ -279,56 +279,42 @@ TEST(RenderScene, BoxMarkerTurnsWithItsOrientation) {
 
 namespace {
 
-// Base box + one revolute body whose visual is a mesh (no collision): its stand-in runs from
-// the body origin to the child's joint.
-Model two_body_model() {
-  Model m;
-  m.n = 2;
-  m.nv = 2;
-  m.parent = {-1, 0, 1};
-  m.joint_type = {JointType::Revolute, JointType::Revolute, JointType::Revolute};
-  m.X_tree = {SE3(), SE3(Mat3::Identity(), Vec3(0, 0, 0.2)),
-              SE3(Mat3::Identity(), Vec3(0, 0, 0.5))};
-  m.inertia.assign(3, Inertia::from_com(1.0, Vec3::Zero(), Mat3::Identity() * 0.01));
-  m.body_name = {"base", "arm", "tip"};
-  m.joint_name = {"", "j1", "j2"};
-  m.lower.assign(3, -1e9);
-  m.upper.assign(3, 1e9);
-  m.effort.assign(3, 1e9);
-  m.velocity.assign(3, 1e9);
-  m.damping.assign(3, 0);
-  m.friction.assign(3, 0);
-  m.links = {{"base", 0, SE3()}, {"arm", 1, SE3()}, {"tip", 2, SE3()}};
-  Geometry box;
-  box.type = GeometryType::Box;
-  box.size = Vec3(0.3, 0.3, 0.1);
-  box.link = "base";
-  Geometry mesh;
-  mesh.type = GeometryType::Mesh;
-  mesh.mesh = "arm.dae";
-  mesh.link = "arm";
-  m.visuals = {box, mesh};
-  m.visual_body = {0, 1};
-  m.finalize();
-  return m;
-}
+// Base box + one revolute link whose visual is a mesh that does not exist (and no collision):
+// its stand-in runs from the link origin to its child's joint.
+const char* kTwoBodyUrdf = R"(<robot name="two">
+  <link name="base"><visual><geometry><box size="0.3 0.3 0.1"/></geometry></visual></link>
+  <link name="arm">
+    <inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><mesh filename="arm_missing.dae"/></geometry></visual>
+  </link>
+  <link name="tip">
+    <inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="j1" type="continuous"><parent link="base"/><child link="arm"/>
+    <origin xyz="0 0 0.2"/><axis xyz="0 0 1"/></joint>
+  <joint name="j2" type="continuous"><parent link="arm"/><child link="tip"/>
+    <origin xyz="0 0 0.5"/><axis xyz="0 0 1"/></joint>
+</robot>)";
 
 }  // namespace
 
 TEST(RenderScene, MeshStandInsAndModelPixels) {
-  const Model m = two_body_model();
-  const auto items = make_draw_items(m);
-  ASSERT_GE(items.size(), 3u);
-  EXPECT_EQ(items[0].shape, DrawItem::Shape::Box);
-  bool segment = false;
-  for (const auto& it : items)
-    if (it.body == 1 && it.shape == DrawItem::Shape::Cylinder &&
-        std::abs(it.size.z() - 0.5) < 1e-12) {
-      segment = true;
-      EXPECT_TRUE(it.local.p.isApprox(Vec3(0, 0, 0.25)));
-      EXPECT_NEAR(std::abs(it.local.R.col(2).z()), 1.0, 1e-12);
-    }
-  EXPECT_TRUE(segment);
+  const Model m = model_from_urdf_string(kTwoBodyUrdf);
+  GeometryOptions go;
+  go.paths.base_dir = ::testing::TempDir();
+  const GeometryModel g = geometry_from_urdf_string(m, kTwoBodyUrdf, go);
+  ASSERT_EQ(g.warnings.size(), 1u);
+  EXPECT_NE(g.warnings[0].find("arm"), std::string::npos);
+  EXPECT_NE(g.warnings[0].find("arm_missing.dae"), std::string::npos);
+  const auto items = make_draw_items(m, g);
+  ASSERT_EQ(items.size(), 2u);
+  EXPECT_EQ(items[0].shape, ShapeType::Box);
+  EXPECT_EQ(items[1].shape, ShapeType::Capsule);
+  EXPECT_TRUE(items[1].stand_in);
+  EXPECT_EQ(items[1].body, 1);
+  EXPECT_NEAR(items[1].size.z(), 0.5, 1e-12);
+  EXPECT_TRUE(items[1].local.p.isApprox(Vec3(0, 0, 0.25)));
+  EXPECT_NEAR(std::abs(items[1].local.R.col(2).z()), 1.0, 1e-12);
 
   // Poses by hand (body 1 at 0.2 m, body 2 at 0.7 m above the base).
   std::vector<SE3> oMb = {SE3(), SE3(Mat3::Identity(), Vec3(0, 0, 0.2)),
@@ -339,7 +325,7 @@ TEST(RenderScene, MeshStandInsAndModelPixels) {
   c.update();
   Renderer r(c);
   make_plain(r);
-  r.set_model(m);
+  r.set_items(items);
   r.render(oMb);
   Vec2 px;
   ASSERT_TRUE(c.project(Vec3(0, 0, 0.45), px));  // the middle of the arm's stand-in
@@ -407,12 +393,12 @@ TEST(RenderScene, CameraSpecAndPngOfARealRobot) {
   EXPECT_FALSE(opt.auto_camera);
   EXPECT_EQ(opt.camera.focal_px, 900);
 
-  Model m;
-  try {
-    m = model_from_urdf_file(std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf");
-  } catch (const std::exception& e) {
-    GTEST_SKIP() << "URDF loader not available: " << e.what();
-  }
+  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const Model m = model_from_urdf_file(urdf);
+  GeometryOptions go;
+  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
+  EXPECT_TRUE(g.warnings.empty());
   RenderOptions o;
   o.q = VecX::Zero(m.n);
   if (m.n >= 7) {
@@ -422,15 +408,15 @@ TEST(RenderScene, CameraSpecAndPngOfARealRobot) {
   }
   const std::string out = ::testing::TempDir() + "se3_render_panda.png";
   std::remove(out.c_str());
-  ASSERT_EQ(render_to_png(m, o, out, &err), 0) << err;
+  ASSERT_EQ(render_to_png(m, g, o, out, &err), 0) << err;
   std::ifstream f(out, std::ios::binary);
   char sig[8] = {};
   f.read(sig, 8);
   EXPECT_EQ(std::string(sig + 1, 3), "PNG");
-  EXPECT_EQ(render_to_png(m, o, "/nonexistent-dir/x.png", &err), 1);
+  EXPECT_EQ(render_to_png(m, g, o, "/nonexistent-dir/x.png", &err), 1);
   EXPECT_FALSE(err.empty());
   o.q = VecX::Zero(m.n + 1);
-  EXPECT_EQ(render_to_png(m, o, out, &err), 1);
+  EXPECT_EQ(render_to_png(m, g, o, out, &err), 1);
 }
 
 TEST(RenderRaster, Rgb8CopyMatchesThePixels) {

@@ -168,6 +168,7 @@ class SimulatorNode {
     override_double("publish_rate", scene_.publish_rate);
     pnh_.param("command_timeout", command_timeout_, 0.5);
     pnh_.param<std::string>("world_frame", world_frame_, "world");
+    world_frame_ = se3::frame_name(world_frame_);  // tf2 frame names have no leading '/'
     nh_.param("/use_sim_time", use_sim_time_, false);
     if (!(scene_.dt > 0) || !std::isfinite(scene_.dt)) throw std::runtime_error("~dt must be > 0");
     if (!(scene_.real_time_factor >= 0) || !std::isfinite(scene_.real_time_factor)) {
@@ -183,9 +184,10 @@ class SimulatorNode {
     const se3::Model& m = sim_->model();
     if (!had_description) {
       // Others (renderer, teleop) read the robot from robot_description.
+      const se3::GeometryModel chain = se3::chain_geometry(m);  // chain:N has no file
       const std::string text = !urdf_xml.empty() ? urdf_xml
                                : scene_.robot_path.compare(0, 6, "chain:") == 0
-                                   ? se3::model_to_urdf(m)
+                                   ? se3::model_to_urdf(m, &chain)
                                    : read_file(scene_.robot_path);
       nh_.setParam("robot_description", text);
     }

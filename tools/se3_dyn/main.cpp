@@ -121,7 +121,7 @@ const char* kUsage =
     "           --duration T [--tol E] [--seed S] [--random] [--gravity gx,gy,gz]\n"
     "           [--out traj.csv] [--json]\n"
     "  render (MODEL.urdf [--floating] | --scene S) [--camera ex,ey,ez,tx,ty,tz[,f_px]]\n"
-    "         --out frame.png\n"
+    "         [--package-path DIR[:DIR]] --out frame.png\n"
     "MODEL.urdf may also be chain:N, a generated chain of N bodies.\n";
 
 }  // namespace
