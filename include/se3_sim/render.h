@@ -154,6 +154,8 @@ std::vector<DrawItem> make_draw_items(const Model& model, const GeometryModel& g
 void frame_items(const std::vector<DrawItem>& items, const std::vector<SE3>& oMb, Camera& cam,
                  const std::vector<Marker>& boxes = {});
 
+struct Rect;  // a pixel rectangle (internal)
+
 class Renderer {
  public:
   explicit Renderer(const Camera& cam = Camera());
@@ -195,7 +197,9 @@ class Renderer {
   void draw_overlay(const Overlay& overlay);
 
   const Framebuffer& framebuffer() const { return fb_; }
-  Framebuffer& framebuffer() { return fb_; }
+  /// Write access; the next render() then redraws the whole background (it otherwise
+  /// restores only where the previous frame drew).
+  Framebuffer& framebuffer();
   /// Sky and ground colours of pixel row y at column x as draw_background() paints them.
   uint32_t background(int x, int y) const;
   /// Whether draw_background() painted pixel (x, y) as ground (else sky).
@@ -219,7 +223,7 @@ class Renderer {
   void frame_part(int phase, int part, int parts);
   void background_rows(const RowSet& rows);
   void grid_rows(const RowSet& rows);
-  void draw_segment_rows(const Vec4& a, const Vec4& b, Rgb color, float width, bool depth_test,
+  Rect draw_segment_rows(const Vec4& a, const Vec4& b, Rgb color, float width, bool depth_test,
                          float opacity, float fade, const RowSet& rows);
 
   Camera cam_;

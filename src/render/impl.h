@@ -3,6 +3,7 @@
 // thread.
 #pragma once
 
+#include <algorithm>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -23,6 +24,23 @@ enum : uint8_t {
   kBottom = 16
 };
 
+/// A pixel rectangle [x0, x1) x [y0, y1); empty when x0 >= x1 or y0 >= y1.
+struct Rect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+  void add(const Rect& r) {
+    if (r.empty()) return;
+    if (empty()) {
+      *this = r;
+      return;
+    }
+    x0 = std::min(x0, r.x0);
+    y0 = std::min(y0, r.y0);
+    x1 = std::max(x1, r.x1);
+    y1 = std::max(y1, r.y1);
+  }
+};
+
 /// One item's transform for one frame.
 struct ItemFrame {
   float m[12];           ///< rows U, V, W of P * pose * scale (clip x, y, depth), row-major 3x4
@@ -33,6 +51,7 @@ struct ItemFrame {
   bool rescale = false;  ///< normals need inv_scale and renormalizing
   bool visible = false;
   std::size_t vbase = 0;  ///< first vertex in the frame buffers
+  Rect rect;              ///< pixels it may cover (its box's image, or all)
 };
 
 /// Glyphs of the overlay font, rendered once with Cairo; drawing text is then a blend.
@@ -54,6 +73,15 @@ struct Renderer::Impl {
   std::vector<ItemFrame> frames;
   RenderMesh box, cylinder, sphere, cone;
   TextAtlas atlas;
+
+  // The background and grid depend on the camera only: drawn once into `background` and
+  // restored each frame where the last frame drew (`dirty`), with the depth cleared there.
+  std::vector<uint32_t> background;
+  bool background_ok = false;
+  Mat4 background_P = Mat4::Zero();
+  Vec3 background_eye = Vec3::Zero();
+  double background_grid[3] = {0, 0, 0};
+  Rect dirty, next_dirty;
 
   // Lighting (ambient, sun, head light).
   float ka = 0.26f, kd = 0.58f, kh = 0.22f;

@@ -104,6 +104,7 @@ void Renderer::draw_overlay(const Overlay& ov) {
   // The panel: a dark, half-transparent box behind the text.
   const int x1 = std::min(fb_.width(), pad + wmax + 2 * pad);
   const int y1 = std::min(fb_.height(), pad + n * lh + pad);
+  impl_->next_dirty.add(Rect{pad, pad, x1, y1});
   const Rgb panel(20, 26, 36);
   for (int y = pad; y < y1; ++y)
     for (int x = pad; x < x1; ++x) fb_.blend(x, y, panel, 0.55f);

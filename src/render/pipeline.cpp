@@ -77,16 +77,36 @@ bool Renderer::Impl::prepare(const RenderMesh& mesh, const SE3& pose, const Vec3
   T.topRightCorner<3, 1>() = pose.p;
   f.clip = cam.P * T;
   if (!f.clip.allFinite()) return false;
-  // Whole mesh outside one plane: nothing to do.
+  // Whole mesh outside one plane: nothing to do. Else the pixels its box can cover.
   const Eigen::Vector3d lo = mesh.lower.cast<double>(), hi = mesh.upper.cast<double>();
+  Vec4 corner[8];
+  for (int c = 0; c < 8; ++c) {
+    corner[c] = f.clip * Vec4((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(),
+                              (c & 4) ? hi.z() : lo.z(), 1.0);
+  }
   for (int p = 0; p < planes.count; ++p) {
     bool all_out = true;
-    for (int c = 0; c < 8 && all_out; ++c) {
-      const Vec4 x((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z(),
-                   1.0);
-      all_out = planes.plane[p].dot(f.clip * x) < 0;
-    }
+    for (int c = 0; c < 8 && all_out; ++c) all_out = planes.plane[p].dot(corner[c]) < 0;
     if (all_out) return false;
+  }
+  f.rect = Rect{0, 0, cam.width, cam.height};
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  bool in_front = true;
+  for (const Vec4& c : corner) {
+    if (!(c.w() >= cam.near)) {
+      in_front = false;
+      break;
+    }
+    const double u = c.x() / c.w(), v = c.y() / c.w();
+    x0 = std::min(x0, u);
+    x1 = std::max(x1, u);
+    y0 = std::min(y0, v);
+    y1 = std::max(y1, v);
+  }
+  if (in_front) {
+    f.rect = Rect{std::max(0, int(std::floor(x0)) - 1), std::max(0, int(std::floor(y0)) - 1),
+                  std::min(cam.width, int(std::ceil(x1)) + 2),
+                  std::min(cam.height, int(std::ceil(y1)) + 2)};
   }
   const int rows[3] = {0, 1, 3};
   for (int r = 0; r < 3; ++r)

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 
 #include "impl.h"
@@ -98,6 +99,7 @@ void Renderer::draw_mesh(const RenderMesh& mesh, const SE3& pose, const Vec3& sc
   I.reserve(mesh.vertex_count());  // allocates only for a mesh larger than any before
   ItemFrame f;
   if (!I.prepare(mesh, pose, scale, cam_, planes_, style_.light, 0, f)) return;
+  I.next_dirty.add(f.rect);
   fb_.set_simd(style_.simd);
   I.transform(mesh, 0, mesh.vertex_count(), f, cam_, style_.simd);
   float c[3];
@@ -106,6 +108,11 @@ void Renderer::draw_mesh(const RenderMesh& mesh, const SE3& pose, const Vec3& sc
     for (int k = 0; k < 3; ++k) c[k] = float(std::clamp((*rgb)[k], 0.0, 1.0));
   }
   I.triangles(mesh, f, rgb ? c : nullptr, planes_, RowSet(), fb_);
+}
+
+Framebuffer& Renderer::framebuffer() {
+  impl_->background_ok = false;
+  return fb_;
 }
 
 void Renderer::draw_box(const SE3& pose, const Vec3& size, const Eigen::Vector3d& rgb) {
@@ -218,16 +225,24 @@ void Renderer::grid_rows(const RowSet& rows) {
 
 void Renderer::draw_segment(const Vec4& a, const Vec4& b, Rgb color, float width, bool depth_test,
                             float opacity, float fade) {
-  draw_segment_rows(a, b, color, width, depth_test, opacity, fade, RowSet());
+  impl_->next_dirty.add(draw_segment_rows(a, b, color, width, depth_test, opacity, fade, RowSet()));
 }
 
-void Renderer::draw_segment_rows(const Vec4& a, const Vec4& b, Rgb color, float width,
+Rect Renderer::draw_segment_rows(const Vec4& a, const Vec4& b, Rgb color, float width,
                                  bool depth_test, float opacity, float fade, const RowSet& rows) {
   Vec4 ca = cam_.clip(a), cb = cam_.clip(b);
-  if (!clip_segment(planes_, ca, cb)) return;
+  if (!clip_segment(planes_, ca, cb)) return Rect();
   const ScreenVertex sa{float(ca.x() / ca.w()), float(ca.y() / ca.w()), float(ca.z() / ca.w())};
   const ScreenVertex sb{float(cb.x() / cb.w()), float(cb.y() / cb.w()), float(cb.z() / cb.w())};
   fb_.draw_line(sa, sb, color, width, opacity, depth_test, fade, rows);
+  const float r = std::max(1.0f, width) + 2.0f;
+  auto clampi = [](float v, int lo, int hi) {
+    return std::isfinite(v) ? std::clamp(int(v), lo, hi) : lo;
+  };
+  return Rect{clampi(std::floor(std::min(sa.x, sb.x) - r), 0, fb_.width()),
+              clampi(std::floor(std::min(sa.y, sb.y) - r), 0, fb_.height()),
+              clampi(std::ceil(std::max(sa.x, sb.x) + r), 0, fb_.width()),
+              clampi(std::ceil(std::max(sa.y, sb.y) + r), 0, fb_.height())};
 }
 
 void Renderer::draw_marker(const Marker& m) {
@@ -238,9 +253,15 @@ void Renderer::draw_marker(const Marker& m) {
     case Marker::Type::Point: {
       Vec2 px;
       double iz;
-      if (cam_.project(m.a, px, &iz))
-        fb_.fill_disc(ScreenVertex{float(px.x()), float(px.y()), float(iz)},
-                      float(std::clamp(m.size, 1.0, 200.0) * 0.5), c, true);
+      if (cam_.project(m.a, px, &iz) && px.allFinite() && std::abs(px.x()) < 1e6 &&
+          std::abs(px.y()) < 1e6) {
+        const float rad = float(std::clamp(m.size, 1.0, 200.0) * 0.5);
+        fb_.fill_disc(ScreenVertex{float(px.x()), float(px.y()), float(iz)}, rad, c, true);
+        impl_->next_dirty.add(Rect{std::max(0, int(px.x() - rad) - 2),
+                                   std::max(0, int(px.y() - rad) - 2),
+                                   std::min(fb_.width(), int(px.x() + rad) + 3),
+                                   std::min(fb_.height(), int(px.y() + rad) + 3)});
+      }
       break;
     }
     case Marker::Type::Sphere:
@@ -317,8 +338,25 @@ void Renderer::frame_part(int phase, int part, int parts) {
   rows.parts = parts;
   rows.part = part;
   if (phase == 1) {
-    background_rows(rows);
-    if (style_.grid) grid_rows(rows);
+    const int W = fb_.width();
+    if (I.background_ok) {
+      // Only where the last frame drew: the cached background back, depth cleared.
+      const Rect& d = I.dirty;
+      for (int y = d.y0; y < d.y1; ++y) {
+        if (!rows.has(y)) continue;
+        const std::size_t at = std::size_t(y) * W + d.x0;
+        std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(d.x1 - d.x0) * 4);
+        std::memset(fb_.depth() + at, 0, std::size_t(d.x1 - d.x0) * 4);
+      }
+    } else {
+      background_rows(rows);
+      if (style_.grid) grid_rows(rows);
+      for (int y = 0; y < fb_.height(); ++y) {
+        if (!rows.has(y)) continue;
+        const std::size_t at = std::size_t(y) * W;
+        std::memcpy(I.background.data() + at, fb_.color() + at, std::size_t(W) * 4);
+      }
+    }
     std::size_t total = 0;
     for (const DrawItem& it : items_) total += it.mesh ? it.mesh->vertex_count() : 0;
     const std::size_t lo = total * part / parts, hi = total * (part + 1) / parts;
@@ -350,6 +388,22 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
                       const Overlay& overlay) {
   Impl& I = *impl_;
   fb_.set_simd(style_.simd);
+  // The cached background serves while camera and grid are as when it was drawn.
+  const double grid_sig[3] = {style_.grid ? 1.0 : 0.0, style_.grid_spacing,
+                              double(style_.grid_lines)};
+  const std::size_t npix = std::size_t(fb_.width()) * fb_.height();
+  if (I.background.size() != npix || I.background_P != cam_.P || I.background_eye != cam_.eye ||
+      !std::equal(grid_sig, grid_sig + 3, I.background_grid)) {
+    I.background_ok = false;
+  }
+  if (!I.background_ok) {
+    I.background.resize(npix);  // allocates only when the image size changes
+    I.background_P = cam_.P;
+    I.background_eye = cam_.eye;
+    std::copy(grid_sig, grid_sig + 3, I.background_grid);
+  }
+  I.dirty = I.next_dirty;
+  I.next_dirty = Rect();
   // Item transforms (serial: a few matrix products each).
   std::size_t vbase = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
@@ -373,6 +427,7 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
     frame_part(1, 0, 1);
     frame_part(2, 0, 1);
   }
+  I.background_ok = true;
   for (const Marker& m : markers) draw_marker(m);
   if (style_.frames) {
     const double L = style_.frame_length;

@@ -74,15 +74,17 @@ struct Target {
   RowSet rows;
 };
 
+// The pixel loops. Row by row: edge values step by ey, the planes' row values by zy and ky
+// (float additions, the same in both paths); a pixel's z and k are row value + step * column.
 void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
   const int n = s.bx1 - s.bx0 + 1;
   int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
-  for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2]) {
+  float zr = s.z0, kr = s.k0;
+  for (int y = s.by0; y <= s.by1;
+       ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2], zr += s.zy, kr += s.ky) {
     if (!T.rows.has(y)) continue;
     int i0, i1;
     if (!row_span(er, s.ex, n, i0, i1)) continue;
-    const float fj = float(y - s.by0);
-    const float zr = s.z0 + s.zy * fj, kr = s.k0 + s.ky * fj;
     uint32_t* crow = T.color + std::size_t(y) * T.W + s.bx0;
     float* drow = T.depth + std::size_t(y) * T.W + s.bx0;
     for (int i = i0; i <= i1; ++i) {
@@ -100,65 +102,84 @@ void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
 }
 
 #if SE3_RASTER_SSE2
+// Four pixels at columns x .. x + 3 (relative column ii) of a row: edge lanes e, planes' row
+// values zr, kr.
+inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __m128 kr, __m128 zx,
+                       __m128 kx, const __m128 c[3], uint32_t* crow, float* drow) {
+  const __m128i outside = _mm_srai_epi32(_mm_or_si128(_mm_or_si128(e0, e1), e2), 31);
+  const __m128 fi = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(ii), _mm_setr_epi32(0, 1, 2, 3)));
+  const __m128 z = _mm_add_ps(zr, _mm_mul_ps(zx, fi));
+  const __m128 d = _mm_loadu_ps(drow);
+  const __m128 m = _mm_andnot_ps(_mm_castsi128_ps(outside), _mm_cmpgt_ps(z, d));
+  if (!_mm_movemask_ps(m)) return;
+  _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+  const __m128 k = _mm_add_ps(kr, _mm_mul_ps(kx, fi));
+  const __m128 c255 = _mm_set1_ps(255.0f);
+  const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[0], k), c255));
+  const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[1], k), c255));
+  const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[2], k), c255));
+  const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+  const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+  const __m128i mi = _mm_castps_si128(m);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
+                   _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+}
+
 void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
   const int n = s.bx1 - s.bx0 + 1;
   const int W = T.W;
-  const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
   const __m128 zx = _mm_set1_ps(s.zx), kx = _mm_set1_ps(s.kx);
-  const __m128 cr = _mm_set1_ps(rgb[0]), cg = _mm_set1_ps(rgb[1]), cb = _mm_set1_ps(rgb[2]);
-  const __m128 c255 = _mm_set1_ps(255.0f);
+  const __m128 c[3] = {_mm_set1_ps(rgb[0]), _mm_set1_ps(rgb[1]), _mm_set1_ps(rgb[2])};
   // Each edge at the row's first four columns, stepped down a row at a time.
-  __m128i ev[3], eyv[3];
+  __m128i ev[3], eyv[3], ex4[3];
   for (int k = 0; k < 3; ++k) {
     ev[k] =
         _mm_setr_epi32(s.e0[k], s.e0[k] + s.ex[k], s.e0[k] + 2 * s.ex[k], s.e0[k] + 3 * s.ex[k]);
     eyv[k] = _mm_set1_epi32(s.ey[k]);
+    ex4[k] = _mm_set1_epi32(4 * s.ex[k]);
   }
+  // Groups of four from the box's left column never pass the image's right border unless
+  // the box ends within three columns of it; then a group shifts left (its extra lanes are
+  // outside the box and fail the edge test).
+  const bool border = s.bx0 + ((n + 3) & ~3) > W;
+  const bool all_rows = T.rows.parts == 1;
   int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
+  float zrs = s.z0, krs = s.k0;
   for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
-           ev[0] = _mm_add_epi32(ev[0], eyv[0]), ev[1] = _mm_add_epi32(ev[1], eyv[1]),
-           ev[2] = _mm_add_epi32(ev[2], eyv[2])) {
-    if (!T.rows.has(y)) continue;
-    int i0, i1;
-    if (!row_span(er, s.ex, n, i0, i1)) continue;
-    const float fj = float(y - s.by0);
-    const __m128 zr = _mm_set1_ps(s.z0 + s.zy * fj), kr = _mm_set1_ps(s.k0 + s.ky * fj);
-    uint32_t* crow = T.color + std::size_t(y) * W;
-    float* drow = T.depth + std::size_t(y) * W;
-    for (int i = i0; i <= i1; i += 4) {
-      // Four pixels from column x; near the right border the group shifts left (the extra
-      // lanes fail the edge test: they are outside the triangle's box).
-      int ii = i;
-      if (s.bx0 + ii + 4 > W) ii = W - 4 - s.bx0;
-      const int x = s.bx0 + ii;
+           zrs += s.zy, krs += s.ky, ev[0] = _mm_add_epi32(ev[0], eyv[0]),
+           ev[1] = _mm_add_epi32(ev[1], eyv[1]), ev[2] = _mm_add_epi32(ev[2], eyv[2])) {
+    if (!all_rows && !T.rows.has(y)) continue;
+    int i0 = 0, i1 = n - 1;
+    if (n >= kSpanMin && !row_span(er, s.ex, n, i0, i1)) continue;
+    const __m128 zr = _mm_set1_ps(zrs), kr = _mm_set1_ps(krs);
+    uint32_t* crow = T.color + std::size_t(y) * W + s.bx0;
+    float* drow = T.depth + std::size_t(y) * W + s.bx0;
+    if (!border) {
+      int i = i0 & ~3;  // groups aligned to the box's left column
       __m128i e0 = ev[0], e1 = ev[1], e2 = ev[2];
-      if (ii) {
-        e0 = _mm_add_epi32(e0, _mm_set1_epi32(ii * s.ex[0]));
-        e1 = _mm_add_epi32(e1, _mm_set1_epi32(ii * s.ex[1]));
-        e2 = _mm_add_epi32(e2, _mm_set1_epi32(ii * s.ex[2]));
+      if (i) {
+        e0 = _mm_add_epi32(e0, _mm_set1_epi32(i * s.ex[0]));
+        e1 = _mm_add_epi32(e1, _mm_set1_epi32(i * s.ex[1]));
+        e2 = _mm_add_epi32(e2, _mm_set1_epi32(i * s.ex[2]));
       }
-      const __m128i outside = _mm_srai_epi32(_mm_or_si128(_mm_or_si128(e0, e1), e2), 31);
-      const __m128 fi = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(ii), lane));
-      const __m128 z = _mm_add_ps(zr, _mm_mul_ps(zx, fi));
-      const __m128 d = _mm_loadu_ps(drow + x);
-      const __m128 m = _mm_andnot_ps(_mm_castsi128_ps(outside), _mm_cmpgt_ps(z, d));
-      if (!_mm_movemask_ps(m)) continue;
-      _mm_storeu_ps(drow + x, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
-      const __m128 k = _mm_add_ps(kr, _mm_mul_ps(kx, fi));
-      const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(cr, k), c255));
-      const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(cg, k), c255));
-      const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(cb, k), c255));
-      const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
-      const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow + x));
-      const __m128i mi = _mm_castps_si128(m);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(crow + x),
-                       _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+      for (; i <= i1; i += 4, e0 = _mm_add_epi32(e0, ex4[0]), e1 = _mm_add_epi32(e1, ex4[1]),
+                              e2 = _mm_add_epi32(e2, ex4[2])) {
+        group_sse2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+      }
+    } else {
+      for (int i = i0 & ~3; i <= i1; i += 4) {
+        const int ii = std::min(i, W - 4 - s.bx0);
+        const __m128i e0 = _mm_add_epi32(ev[0], _mm_set1_epi32(ii * s.ex[0]));
+        const __m128i e1 = _mm_add_epi32(ev[1], _mm_set1_epi32(ii * s.ex[1]));
+        const __m128i e2 = _mm_add_epi32(ev[2], _mm_set1_epi32(ii * s.ex[2]));
+        group_sse2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+      }
     }
   }
 }
 #endif
 
-// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most 2 x 2 pixels
+// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most eight pixels
 // are drawn here pixel by pixel (most triangles of a detailed mesh; the same code serves both
 // paths), the rest go to the pixel loops.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
@@ -211,29 +232,30 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
   const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
   const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
-  if (bx1 - bx0 < 2 && by1 - by0 < 2) {
-    // Which of the (at most four) centres are covered; only then the planes.
-    int covered = 0;
-    for (int j = 0; j <= by1 - by0; ++j) {
+  const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
+  if (w <= 4 && h <= 4 && w * h <= 8) {
+    // Which of the (at most eight) centres are covered; only then the planes.
+    unsigned covered = 0;
+    for (int j = 0; j < h; ++j) {
       const int32_t sy = kSubpixel * j;
-      for (int i = 0; i <= bx1 - bx0; ++i) {
+      for (int i = 0; i < w; ++i) {
         const int32_t sx = kSubpixel * i;
-        covered |= ((t0 + sx * dy0 - sy * dx0) | (t1 + sx * dy1 - sy * dx1) |
-                    (t2 + sx * dy2 - sy * dx2)) >= 0
-                       ? 1 << (2 * j + i)
-                       : 0;
+        if (((t0 + sx * dy0 - sy * dx0) | (t1 + sx * dy1 - sy * dx1) |
+             (t2 + sx * dy2 - sy * dx2)) >= 0) {
+          covered |= 1u << (4 * j + i);
+        }
       }
     }
     if (!covered) return;
     const float inv = 1.0f / float(-area);
     const float wa = az * inv, wb = bz * inv, wc = cz * inv;
     const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
-    for (int j = 0; j <= by1 - by0; ++j) {
+    for (int j = 0; j < h; ++j) {
       const int y = by0 + j;
-      if (!T.rows.has(y)) continue;
+      if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
       const int32_t sy = kSubpixel * j;
-      for (int i = 0; i <= bx1 - bx0; ++i) {
-        if (!(covered >> (2 * j + i) & 1)) continue;
+      for (int i = 0; i < w; ++i) {
+        if (!(covered >> (4 * j + i) & 1u)) continue;
         const int32_t sx = kSubpixel * i;
         const float ff0 = float(e0 + sx * dy0 - sy * dx0), ff1 = float(e1 + sx * dy1 - sy * dx1);
         const float ff2 = float(e2 + sx * dy2 - sy * dx2);

@@ -278,7 +278,16 @@ ResourceResolver ros_resolver(const std::string& base_dir) {
       const std::size_t slash = uri.find('/', 10);
       const std::string pkg =
           uri.substr(10, slash == std::string::npos ? std::string::npos : slash - 10);
-      const std::string dir = pkg.empty() ? std::string() : ros::package::getPath(pkg);
+      std::string dir = pkg.empty() ? std::string() : ros::package::getPath(pkg);
+      if (dir.empty() && !pkg.empty()) {
+        // se3_sim carries the meshes of its own robots (data/meshes) for a node started
+        // without the launch files' ROS_PACKAGE_PATH.
+        const std::string own = ros::package::getPath("se3_sim");
+        ResourcePaths paths;
+        paths.use_ros_package_path = false;
+        if (!own.empty()) paths.package_path = {own + "/data/meshes"};
+        dir = find_package(pkg, paths);
+      }
       if (dir.empty()) {
         if (error) *error = "package '" + pkg + "' not found by rospack (ROS_PACKAGE_PATH)";
         return "";
