@@ -11,7 +11,7 @@
 //   bench_render --save_png=docs/render_panda.png  also writes a picture of the Panda
 //   bench_render --robots=DIR                      robots from DIR (default: the source tree's)
 //   bench_render --frames=SCENE[:N[:THREADS]]      only N frames (10) of ours, for callgrind:
-//     valgrind --tool=callgrind --toggle-collect='se3::render::Renderer::render*' \
+//     valgrind --tool=callgrind --toggle-collect='se3::render::Renderer::render*'
 //              --toggle-collect='se3::render::Renderer::copy_rgb8*' bench_render
 //              --frames=panda_full
 //   (SCENE: 1k 10k 100k 1M panda_full solo12_full)
