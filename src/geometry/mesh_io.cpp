@@ -74,10 +74,10 @@ bool check_stl(const unsigned char* d, std::size_t size, const MeshLimits& limit
 // Import flags of the first pass: validated, triangles only (points and lines dropped).
 unsigned configure(Assimp::Importer& imp) {
   imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // A file without meshes is an error here, not a skeleton drawn as a stand-in by assimp.
+  imp.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
   // Smooth shading across edges below 60 degrees; sharper creases keep one normal a side.
   imp.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, 60.0f);
-  // RViz drops the rotation of the root node that carries <up_axis>; not making it is the same.
-  imp.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   return aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType;
 }
 
