@@ -203,7 +203,8 @@ std::vector<char> silhouette(const std::vector<Vec3>& P, int a, const Vec3& lo, 
 std::vector<Vec3> placed_triangles(const GeometryObject& o) {
   std::vector<Vec3> P;
   for (uint32_t i : o.shape.mesh->indices) {
-    P.push_back(o.placement.act(o.shape.mesh->positions[i].cast<double>().cwiseProduct(o.shape.scale)));
+    P.push_back(
+        o.placement.act(o.shape.mesh->positions[i].cast<double>().cwiseProduct(o.shape.scale)));
   }
   return P;
 }
@@ -270,8 +271,8 @@ TEST(GeometryMesh, BinaryAndAsciiStlClosedAndSmooth) {
   for (const auto& t : cube()) {
     ascii += " facet normal 0 0 0\n  outer loop\n";
     for (int k = 0; k < 3; ++k) {
-      ascii += "   vertex " + std::to_string(t[3 * k]) + " " + std::to_string(t[3 * k + 1]) +
-               " " + std::to_string(t[3 * k + 2]) + "\n";
+      ascii += "   vertex " + std::to_string(t[3 * k]) + " " + std::to_string(t[3 * k + 1]) + " " +
+               std::to_string(t[3 * k + 2]) + "\n";
     }
     ascii += "  endloop\n endfacet\n";
   }
@@ -444,9 +445,11 @@ TEST(GeometryResource, PackageFileAndRelativeNames) {
   EXPECT_EQ(fs::canonical(pkg), fs::canonical(root / "ws" / "deep" / "my_pkg" / "meshes" / "c.stl"))
       << err;
   EXPECT_EQ(find_package("other", paths), "");  // below a CATKIN_IGNORE
-  const std::string file = resolve_resource("file://" + (root / "urdf" / "rel.stl").string(), paths);
+  const std::string file =
+      resolve_resource("file://" + (root / "urdf" / "rel.stl").string(), paths);
   EXPECT_EQ(file, (root / "urdf" / "rel.stl").string());
-  EXPECT_EQ(fs::canonical(resolve_resource("rel.stl", paths)), fs::canonical(root / "urdf" / "rel.stl"));
+  EXPECT_EQ(fs::canonical(resolve_resource("rel.stl", paths)),
+            fs::canonical(root / "urdf" / "rel.stl"));
   EXPECT_EQ(resolve_resource("package://nopkg/x.stl", paths, &err), "");
   EXPECT_NE(err.find("package 'nopkg' not found"), std::string::npos) << err;
   EXPECT_EQ(resolve_resource("package://my_pkg/meshes/none.stl", paths, &err), "");

@@ -414,8 +414,10 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
     if (!it.mesh) continue;
     vbase += it.mesh->vertex_count();
     if (it.body < 0 || it.body >= int(oMb.size()) || !finite_pose(oMb[it.body])) continue;
-    I.prepare(*it.mesh, oMb[it.body] * it.local, Vec3::Ones(), cam_, planes_, style_.light, f.vbase,
-              f);
+    if (I.prepare(*it.mesh, oMb[it.body] * it.local, Vec3::Ones(), cam_, planes_, style_.light,
+                  f.vbase, f)) {
+      I.next_dirty.add(f.rect);
+    }
   }
   const int parts = style_.threads >= 2 ? 2 : 1;
   if (parts == 2) {
