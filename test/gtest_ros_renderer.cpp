@@ -9,7 +9,7 @@
 #include <set>
 #include <string>
 
-#include "ros/renderer_convert.h"
+#include "se3_sim/ros/renderer_convert.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

@@ -12,6 +12,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "se3_sim/lie.h"
@@ -27,9 +28,21 @@ struct ModelError : std::runtime_error {
 
 /// A URDF link and where it sits on its (merged) body.
 struct LinkFrame {
+  LinkFrame(std::string name_ = "", int body_ = 0, const SE3& offset_ = SE3(), int parent_ = -1,
+            std::string joint_ = "", bool fixed_ = false)
+      : name(std::move(name_)),
+        body(body_),
+        offset(offset_),
+        parent(parent_),
+        joint(std::move(joint_)),
+        fixed(fixed_) {}
   std::string name;
   int body = 0;  ///< body index
   SE3 offset;    ///< link frame = body frame * offset
+  // The URDF tree (for TF as robot_state_publisher publishes it):
+  int parent = -1;     ///< index in Model::links of the URDF parent link (-1: the root)
+  std::string joint;   ///< URDF joint from the parent link ("" for the root)
+  bool fixed = false;  ///< that joint is fixed in the URDF (a locked moving joint is not)
 };
 
 struct Model {

@@ -128,7 +128,7 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
     m.velocity.push_back(inf);
     m.damping.push_back(0);
     m.friction.push_back(0);
-    m.links.push_back({m.body_name.back(), i, SE3()});
+    m.links.push_back({m.body_name.back(), i, SE3(), i - 1, m.joint_name.back(), false});
     m.n = i;
   }
   m.finalize();

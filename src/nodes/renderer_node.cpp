@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "ros/renderer_convert.h"
+#include "se3_sim/ros/renderer_convert.h"
 #include "se3_sim/render.h"
 
 namespace {

@@ -1,4 +1,4 @@
-#include "renderer_convert.h"
+#include "se3_sim/ros/renderer_convert.h"
 
 #include <fcntl.h>
 #include <ros/package.h>
