@@ -15,6 +15,9 @@
 //              --toggle-collect='se3::render::Renderer::copy_rgb8*' bench_render
 //              --frames=panda_full
 //   (SCENE: 1k 10k 100k 1M panda_full solo12_full)
+//   bench_render --simplify_report                 what DrawOptions::simplify_error costs and
+//                                                  saves: triangles, silhouette IoU against the
+//                                                  full meshes, ms a frame (median of 9)
 //
 // The benchmark names: Tri/<scene>/<ours|ours_2threads|llvmpipe>, Frame/<robot>. Counters:
 // triangles (as submitted), ns_per_tri, and for llvmpipe iou (silhouette of its frame against
@@ -22,6 +25,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -445,6 +449,94 @@ int frames_only(const std::string& spec) {
   return 1;
 }
 
+double wall_ms() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+int simplify_report() {
+  struct R {
+    const char* file;
+    bool floating;
+  };
+  std::printf("%-16s %8s %10s %8s %10s %10s\n", "robot", "error_mm", "triangles", "vertices",
+              "IoU_min", "ms_frame");
+  for (const R& rb : {R{"panda.urdf", false}, R{"ur5_robot.urdf", false}, R{"solo12.urdf", true}}) {
+    UrdfOptions uo;
+    uo.floating = rb.floating;
+    const Model m = model_from_urdf_file(robots_dir() + "/" + rb.file, uo);
+    GeometryOptions go;
+    go.paths.package_path = {robots_dir() + "/../meshes"};
+    const GeometryModel g = geometry_from_urdf_file(m, robots_dir() + "/" + rb.file, go);
+    std::vector<std::vector<SE3>> poses;
+    for (int k = 0; k < 3; ++k) {
+      Data d(m);
+      VecX q(m.n);
+      for (int i = 0; i < m.n; ++i) {
+        const int b = i + 1;
+        const double lo = std::isfinite(m.lower[b]) ? m.lower[b] : -M_PI;
+        const double hi = std::isfinite(m.upper[b]) ? m.upper[b] : M_PI;
+        q(i) = m.joint_type[b] == JointType::Prismatic
+                   ? lo
+                   : lo + (0.5 + 0.4 * std::sin(1.7 * (i + 1) * (k + 1))) * (hi - lo);
+      }
+      forward_kinematics(m, d, SE3(), q);
+      poses.push_back(d.oMb);
+    }
+    render::DrawOptions full;
+    full.simplify_error = 0;
+    const auto full_items = render::make_draw_items(m, g, full);
+    render::Camera cam;
+    render::frame_items(full_items, poses[0], cam);
+    std::vector<std::vector<char>> ref;
+    for (const auto& oMb : poses) {
+      render::Renderer r(cam);
+      r.style().grid = false;
+      r.style().overlay = false;
+      r.set_items(full_items);
+      r.render(oMb);
+      const render::Renderer& cr = r;
+      std::vector<char> mask(std::size_t(cam.width) * cam.height);
+      for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = cr.framebuffer().depth()[i] > 0;
+      ref.push_back(mask);
+    }
+    for (double err : {0.0, 0.25e-3, 0.5e-3, 1e-3, 2e-3, 4e-3}) {
+      render::DrawOptions o;
+      o.simplify_error = err;
+      const auto items = render::make_draw_items(m, g, o);
+      std::size_t tris = 0, verts = 0;
+      for (const auto& it : items) tris += it.mesh->triangle_count(), verts += it.mesh->vertex_count();
+      render::Renderer r(cam);
+      r.style().grid = false;
+      r.style().overlay = false;
+      r.set_items(items);
+      double worst = 1.0;
+      std::vector<double> ms;
+      for (std::size_t k = 0; k < poses.size(); ++k) {
+        r.render(poses[k]);
+        const render::Renderer& cr = r;
+        std::size_t in = 0, un = 0;
+        for (std::size_t i = 0; i < ref[k].size(); ++i) {
+          const bool b = cr.framebuffer().depth()[i] > 0;
+          in += ref[k][i] && b;
+          un += ref[k][i] || b;
+        }
+        worst = std::min(worst, un ? double(in) / double(un) : 1.0);
+      }
+      for (int rep = 0; rep < 9; ++rep) {
+        const double t0 = wall_ms();
+        r.render(poses[rep % 3]);
+        ms.push_back(wall_ms() - t0);
+      }
+      std::sort(ms.begin(), ms.end());
+      std::printf("%-16s %8.2f %10zu %8zu %10.4f %10.2f\n", rb.file, err * 1e3, tris, verts, worst,
+                  ms[ms.size() / 2]);
+    }
+  }
+  return 0;
+}
+
 void register_all() {
   const char* names[6] = {"1k", "10k", "100k", "1M", "panda_full", "solo12_full"};
   for (int k = 0; k < 6; ++k) {
@@ -495,6 +587,7 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a.rfind("--robots=", 0) == 0 || a.rfind("--gl_threads=", 0) == 0) continue;
     if (a.rfind("--frames=", 0) == 0) return frames_only(a.substr(9));
+    if (a == "--simplify_report") return simplify_report();
     if (a.rfind("--save_png=", 0) == 0) {
       try {
         if (save_png(a.substr(11))) return 1;
