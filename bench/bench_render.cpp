@@ -506,7 +506,8 @@ int simplify_report() {
       o.simplify_error = err;
       const auto items = render::make_draw_items(m, g, o);
       std::size_t tris = 0, verts = 0;
-      for (const auto& it : items) tris += it.mesh->triangle_count(), verts += it.mesh->vertex_count();
+      for (const auto& it : items)
+        tris += it.mesh->triangle_count(), verts += it.mesh->vertex_count();
       render::Renderer r(cam);
       r.style().grid = false;
       r.style().overlay = false;

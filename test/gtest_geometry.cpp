@@ -401,6 +401,25 @@ TEST(GeometryMesh, MalformedFilesGiveAReason) {
   EXPECT_NE(err.find("limit"), std::string::npos) << err;
 }
 
+// assimp 5.2 dereferences null on a Collada <float_array count="0"> with numbers in it (found
+// by fuzz/fuzz_mesh.cpp): loading it runs in a child process, so the crash is a reason.
+TEST(GeometryMesh, AnImporterCrashIsAReasonNotTheEnd) {
+  const fs::path d = temp_dir("importer_crash");
+  std::string text = collada("1", "Z_UP", "1 1 1");
+  text.replace(text.find("count=\"9\""), 9, "count=\"0\"");
+  write(d / "crash.dae", text);
+  std::string err;
+  EXPECT_FALSE(load_mesh((d / "crash.dae").string(), &err));
+  EXPECT_NE(err.find("crashed"), std::string::npos) << err;
+  const std::string xml = one_link("crash.dae");
+  GeometryOptions go;
+  go.paths.base_dir = d.string();
+  const GeometryModel g = geometry_from_urdf_string(model_from_urdf_string(xml), xml, go);
+  ASSERT_EQ(g.warnings.size(), 1u);
+  EXPECT_NE(g.warnings[0].find("crash.dae"), std::string::npos) << g.warnings[0];
+  EXPECT_TRUE(g.visuals[2].stand_in);
+}
+
 // In a URDF: a warning naming the link, the resource and the reason, a stand-in, no crash.
 TEST(GeometryMesh, MalformedMeshInAUrdfGivesAWarningAndAStandIn) {
   const fs::path d = temp_dir("malformed_urdf");

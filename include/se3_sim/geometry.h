@@ -187,6 +187,11 @@ using ResourceResolver = std::function<std::string(const std::string& uri, std::
 struct MeshLimits {
   std::size_t max_bytes = std::size_t(256) << 20;  ///< file size
   std::size_t max_triangles = 20'000'000;
+  /// load_mesh imports in a child process (POSIX fork), so that an importer that crashes on a
+  /// malformed file (assimp 5.2 does on some) or hangs gives a reason instead of ending the
+  /// process; after `seconds` the child is killed. decode_mesh always runs in-process.
+  bool isolate = true;
+  double seconds = 60;
 };
 
 /// Decodes a mesh from memory. `hint` is the file extension ("stl", "dae", "obj", ...), which
@@ -196,8 +201,9 @@ struct MeshLimits {
 std::shared_ptr<TriangleMesh> decode_mesh(const void* data, std::size_t size,
                                           const std::string& hint, const MeshLimits& limits = {},
                                           std::string* error = nullptr);
-/// Loads a mesh file (an OBJ reads its .mtl beside it). Cached by path: a second call returns
-/// the same mesh (a failure is cached too, with its reason). Thread-safe.
+/// Loads a mesh file (an OBJ reads its .mtl beside it), in a child process unless
+/// limits.isolate is false. Cached by path: a second call returns the same mesh (a failure is
+/// cached too, with its reason). Thread-safe.
 std::shared_ptr<const TriangleMesh> load_mesh(const std::string& path, std::string* error = nullptr,
                                               const MeshLimits& limits = {});
 /// Empties the cache of load_mesh (meshes in use stay alive through their shared pointers).

@@ -1,13 +1,21 @@
 // Mesh files through assimp: STL, Collada, OBJ (+ .mtl) and the rest assimp reads, into
-// TriangleMesh; the load cache; Collada's unit and up axis the way RViz reads them.
+// TriangleMesh; the load cache (file loads in a child process, see isolated()); Collada's unit
+// and up axis the way RViz reads them.
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -230,6 +238,204 @@ std::shared_ptr<TriangleMesh> mesh_from_scene(const aiScene* scene, const std::s
   return out;
 }
 
+// ---- Running an importer in a child process
+//
+// assimp 5.2 (Debian 12) dereferences null on some malformed files (found by fuzzing: a Collada
+// <float_array count="0"> with numbers in it). A file load therefore runs in a forked child
+// that sends the mesh back through a pipe: a crash or a hang of the importer (killed after
+// MeshLimits::seconds) becomes a reason, not the end of the process.
+
+void put(std::string& b, const void* p, std::size_t n) {
+  b.append(static_cast<const char*>(p), n);
+}
+template <class T>
+void put_pod(std::string& b, const T& v) {
+  put(b, &v, sizeof v);
+}
+template <class T>
+void put_vec(std::string& b, const std::vector<T>& v) {
+  put_pod(b, uint64_t(v.size()));
+  if (!v.empty()) put(b, v.data(), v.size() * sizeof(T));
+}
+void put_str(std::string& b, const std::string& s) {
+  put_pod(b, uint64_t(s.size()));
+  put(b, s.data(), s.size());
+}
+
+std::string serialize(const TriangleMesh* m, const std::string& error) {
+  std::string b;
+  put_pod(b, uint32_t(m ? 1 : 0));
+  put_str(b, error);
+  if (!m) return b;
+  put_vec(b, m->positions);
+  put_vec(b, m->normals);
+  put_vec(b, m->colors);
+  put_vec(b, m->indices);
+  put_pod(b, uint64_t(m->submeshes.size()));
+  for (const auto& s : m->submeshes) {
+    put_pod(b, s.first_triangle);
+    put_pod(b, s.triangle_count);
+    put_pod(b, s.material.rgba);
+    put_pod(b, uint8_t(s.material.has_color));
+    put_pod(b, uint8_t(s.closed));
+    put_pod(b, uint8_t(s.outward));
+    put_str(b, s.material.name);
+  }
+  put_pod(b, m->lower);
+  put_pod(b, m->upper);
+  put_pod(b, uint8_t(m->closed));
+  put_pod(b, uint8_t(m->outward));
+  return b;
+}
+
+struct Reader {
+  const std::string& b;
+  std::size_t at = 0;
+  bool ok = true;
+  bool get(void* p, std::size_t n) {
+    if (!ok || n > b.size() - at) return ok = false;
+    std::memcpy(p, b.data() + at, n);
+    at += n;
+    return true;
+  }
+  template <class T>
+  T pod() {
+    T v{};
+    get(&v, sizeof v);
+    return v;
+  }
+  template <class T>
+  void vec(std::vector<T>& v) {
+    const uint64_t n = pod<uint64_t>();
+    if (!ok || n > (b.size() - at) / sizeof(T)) {
+      ok = false;
+      return;
+    }
+    v.resize(n);
+    if (n) get(v.data(), n * sizeof(T));
+  }
+  std::string str() {
+    const uint64_t n = pod<uint64_t>();
+    if (!ok || n > b.size() - at) {
+      ok = false;
+      return "";
+    }
+    std::string s(b.data() + at, n);
+    at += n;
+    return s;
+  }
+};
+
+std::shared_ptr<TriangleMesh> deserialize(const std::string& b, std::string* error) {
+  Reader r{b};
+  const uint32_t has = r.pod<uint32_t>();
+  const std::string err = r.str();
+  if (!r.ok) {
+    if (error) *error = "the mesh importer returned nothing";
+    return nullptr;
+  }
+  if (!has) {
+    if (error) *error = err;
+    return nullptr;
+  }
+  auto m = std::make_shared<TriangleMesh>();
+  r.vec(m->positions);
+  r.vec(m->normals);
+  r.vec(m->colors);
+  r.vec(m->indices);
+  const uint64_t ns = r.pod<uint64_t>();
+  for (uint64_t k = 0; r.ok && k < ns && k <= m->indices.size(); ++k) {
+    TriangleMesh::SubMesh s;
+    s.first_triangle = r.pod<uint32_t>();
+    s.triangle_count = r.pod<uint32_t>();
+    s.material.rgba = r.pod<Vec4f>();
+    s.material.has_color = r.pod<uint8_t>() != 0;
+    s.closed = r.pod<uint8_t>() != 0;
+    s.outward = r.pod<uint8_t>() != 0;
+    s.material.name = r.str();
+    m->submeshes.push_back(s);
+  }
+  m->lower = r.pod<Vec3f>();
+  m->upper = r.pod<Vec3f>();
+  m->closed = r.pod<uint8_t>() != 0;
+  m->outward = r.pod<uint8_t>() != 0;
+  bool sane = r.ok && r.at == b.size() && m->normals.size() == m->positions.size() &&
+              (m->colors.empty() || m->colors.size() == m->positions.size());
+  for (uint32_t i : m->indices) sane = sane && i < m->positions.size();
+  if (!sane) {
+    if (error) *error = "the mesh importer returned a damaged mesh";
+    return nullptr;
+  }
+  return m;
+}
+
+// Runs make() in a child process; its mesh (or reason) comes back through a pipe.
+template <class Make>
+std::shared_ptr<TriangleMesh> isolated(Make&& make, const MeshLimits& limits, std::string* error) {
+  int fds[2];
+  if (::pipe(fds) != 0) return make(error);  // no pipe: in this process, unguarded
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return make(error);
+  }
+  if (pid == 0) {  // the child: import, send, leave without running the parent's exit code
+    ::close(fds[0]);
+    std::string err;
+    const auto m = make(&err);
+    const std::string b = serialize(m.get(), err);
+    std::size_t sent = 0;
+    while (sent < b.size()) {
+      const ssize_t n = ::write(fds[1], b.data() + sent, b.size() - sent);
+      if (n <= 0) break;
+      sent += std::size_t(n);
+    }
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string b;
+  char buf[1 << 16];
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(long(1000 * limits.seconds));
+  bool timed_out = false;
+  for (;;) {
+    const long left = long(std::chrono::duration_cast<std::chrono::milliseconds>(
+                               deadline - std::chrono::steady_clock::now())
+                               .count());
+    if (left <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fds[0], POLLIN, 0};
+    const int r = ::poll(&p, 1, int(std::min(left, 1000L)));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) continue;
+    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    b.append(buf, std::size_t(n));
+  }
+  ::close(fds[0]);
+  if (timed_out) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) {
+    if (error) *error = "the mesh importer took more than " + std::to_string(limits.seconds) + " s";
+    return nullptr;
+  }
+  if (WIFSIGNALED(status)) {
+    if (error) {
+      *error = "the mesh importer (assimp) crashed on it (signal " +
+               std::to_string(WTERMSIG(status)) + ")";
+    }
+    return nullptr;
+  }
+  return deserialize(b, error);
+}
+
 struct CacheEntry {
   std::shared_ptr<const TriangleMesh> mesh;
   std::string error;
@@ -286,32 +492,34 @@ std::shared_ptr<const TriangleMesh> load_mesh(const std::string& path, std::stri
     } else if (size > limits.max_bytes) {
       e.error = "'" + key + "' has " + std::to_string(size) + " bytes (more than the limit of " +
                 std::to_string(limits.max_bytes) + ")";
-    } else if (ext == "obj") {
-      // Through the file system, so that the .mtl beside it is read.
-      try {
-        Assimp::Importer imp;
-        std::shared_ptr<TriangleMesh> m;
-        if (!imp.ReadFile(key, configure(imp))) {
-          e.error = std::string("assimp: ") + imp.GetErrorString();
-        } else {
-          smooth_and_join(imp);
-          m = mesh_from_scene(imp.GetScene(), ext, limits, &e.error);
-        }
-        if (m) m->source = key;
-        e.mesh = m;
-      } catch (const std::exception& x) {
-        e.error = std::string("assimp: ") + x.what();
-      }
     } else {
-      std::ifstream in(key, std::ios::binary);
-      std::vector<char> bytes(size);
-      if (!in || !in.read(bytes.data(), std::streamsize(size))) {
-        e.error = "cannot read '" + key + "'";
-      } else {
-        auto m = decode_mesh(bytes.data(), bytes.size(), ext, limits, &e.error);
-        if (m) m->source = key;
-        e.mesh = m;
-      }
+      auto make = [&](std::string* err) -> std::shared_ptr<TriangleMesh> {
+        if (ext == "obj") {
+          // Through the file system, so that the .mtl beside it is read.
+          try {
+            Assimp::Importer imp;
+            if (!imp.ReadFile(key, configure(imp))) {
+              if (err) *err = std::string("assimp: ") + imp.GetErrorString();
+              return nullptr;
+            }
+            smooth_and_join(imp);
+            return mesh_from_scene(imp.GetScene(), ext, limits, err);
+          } catch (const std::exception& x) {
+            if (err) *err = std::string("assimp: ") + x.what();
+            return nullptr;
+          }
+        }
+        std::ifstream in(key, std::ios::binary);
+        std::vector<char> bytes(size);
+        if (!in || !in.read(bytes.data(), std::streamsize(size))) {
+          if (err) *err = "cannot read '" + key + "'";
+          return nullptr;
+        }
+        return decode_mesh(bytes.data(), bytes.size(), ext, limits, err);
+      };
+      auto m = limits.isolate ? isolated(make, limits, &e.error) : make(&e.error);
+      if (m) m->source = key;
+      e.mesh = m;
     }
     if (e.mesh) e.error.clear();
     it = g_cache.emplace(key, std::move(e)).first;
