@@ -321,6 +321,8 @@ void slope_run(double mu, double duration, double& disp, double& vel, double& pe
   spec.ground_normal = Vec3(std::sin(a), 0, std::cos(a));
   spec.mu = mu;
   spec.contacts_from_collisions = true;
+  spec.geometry =
+      std::make_shared<GeometryModel>(geometry_from_urdf_string(m, box_urdf(0.3, 0.2, 0.1, 1.0)));
   ConstraintSystem cs(m, spec);
   StepperOptions so;
   auto stepper = make_stepper("symplectic_euler", m, so);

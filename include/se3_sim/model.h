@@ -26,20 +26,6 @@ struct ModelError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class GeometryType { Box, Cylinder, Sphere, Mesh };
-
-/// A visual or collision shape, placed in its body's frame.
-struct Geometry {
-  GeometryType type = GeometryType::Box;
-  Vec3 size = Vec3::Zero();  ///< box: full extents; cylinder: (radius, length, 0); sphere: (r,0,0)
-  std::string mesh;          ///< mesh file name (not loaded; see renderer stand-ins)
-  Vec3 mesh_scale = Vec3::Ones();
-  SE3 origin;  ///< shape frame in the body frame
-  Eigen::Vector4d rgba = Eigen::Vector4d(0.7, 0.7, 0.7, 1.0);
-  bool has_color = false;
-  std::string link;  ///< URDF link it came from
-};
-
 /// A URDF link and where it sits on its (merged) body.
 struct LinkFrame {
   LinkFrame(std::string name_ = "", int body_ = 0, const SE3& offset_ = SE3(), int parent_ = -1,
@@ -82,18 +68,14 @@ struct Model {
   std::vector<double> lower, upper;      ///< position limits (-inf, inf) when none
   std::vector<double> effort, velocity;  ///< effort/velocity limits (inf when none)
   std::vector<double> damping, friction;
-  std::vector<LinkFrame> links;   ///< every URDF link, root first
-  std::vector<Geometry> visuals;  ///< body frame placement in Geometry::origin
-  std::vector<int> visual_body;
-  std::vector<Geometry> collisions;
-  std::vector<int> collision_body;
+  std::vector<LinkFrame> links;       ///< every URDF link, root first (shapes: geometry.h)
   std::vector<std::string> warnings;  ///< e.g. inertias that break the triangle inequality
 
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< world frame
 
   /// Index (1..n) of a joint by name, or -1.
   int joint_index(const std::string& joint) const;
-  /// Index into links of a link by name, or -1.
+  /// Index into links of a link by name (a leading '/' ignored), or -1.
   int link_index(const std::string& link) const;
   double total_mass() const;
   /// Checks sizes and numbers; throws ModelError naming the culprit.
@@ -103,6 +85,10 @@ struct Model {
   /// Starts a model by hand: only the base body 0 (link `root`, the given inertia), no joints.
   void start_with_base(const std::string& root, const Inertia& base_inertia = Inertia());
 };
+
+/// The frame name of a URDF link: a leading '/' (ROS 1 URDFs from before tf2) stripped, as
+/// tf2 and robot_state_publisher do. Model names (links, body_name, root_link) are frame names.
+std::string frame_name(const std::string& urdf_link);
 
 struct UrdfOptions {
   bool floating = false;

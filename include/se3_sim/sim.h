@@ -96,9 +96,18 @@ State scene_state(const Scene& scene, const Model& model);
 /// A random state: joints uniform within their limits ([-pi, pi] when unlimited), joint rates
 /// and base twist uniform in [-1, 1], base at the identity. Fixed by seed.
 State random_state(const Model& model, unsigned seed);
-/// Minimal URDF text of a model (links, joints, inertials, box visuals), for robots that exist
-/// only in code (chain:N), so robot_description can be published.
-std::string model_to_urdf(const Model& model);
+/// Minimal URDF text of a model (links, joints, inertials, and the visuals of `geometry` when
+/// given), for robots that exist only in code (chain:N), so robot_description can be published.
+std::string model_to_urdf(const Model& model, const GeometryModel* geometry = nullptr);
+
+/// The geometry of a scene's robot (geometry.h): from urdf_xml when not empty, else from the
+/// scene's robot file (relative meshes beside it), or chain_geometry for chain:N.
+GeometryModel scene_geometry(const Scene& scene, const Model& model,
+                             const std::string& urdf_xml = "", const GeometryOptions& opt = {});
+/// scene.constraints with the collision geometry that contacts_from_collisions needs attached
+/// (primitives only: meshes are not loaded, as contacts skip them).
+ConstraintSpec scene_constraints(const Scene& scene, const Model& model,
+                                 const std::string& urdf_xml = "");
 
 /// An upper bound of the kinetic energy that needs no kinematics, for the divergence guard.
 /// Body i's angular speed is at most |w0| plus the revolute joint rates on its path, and its

@@ -116,42 +116,48 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
       ++idx;
     }
     if (spec.contacts_from_collisions) {
-      for (size_t g = 0; g < model.collisions.size(); ++g) {
-        const Geometry& geo = model.collisions[g];
-        const int body = model.collision_body[g];
+      if (!spec.geometry) {
+        throw ModelError("contacts from collisions need the model's collision geometry");
+      }
+      for (const GeometryObject& geo : spec.geometry->collisions) {
+        const int body = geo.body;
+        if (body < 0 || body > model.n) continue;
         const std::string base_name =
             "contact:" + (geo.link.empty() ? model.body_name[body] : geo.link) + ":";
         auto add = [&](const Vec3& local, double radius) {
           PointRef p;
           p.body = body;
-          p.r = geo.origin.act(local);
+          p.r = geo.placement.act(local);
           contacts_.push_back(p);
           contact_radius_.push_back(radius);
           contact_names_.push_back(base_name + std::to_string(idx++));
         };
-        switch (geo.type) {
-          case GeometryType::Sphere:
-            add(Vec3::Zero(), geo.size.x());
+        const Shape& sh = geo.shape;
+        switch (sh.type) {
+          case ShapeType::Sphere:
+            add(Vec3::Zero(), sh.radius);
             break;
-          case GeometryType::Box:
+          case ShapeType::Box:
             for (int c = 0; c < 8; ++c) {
-              add(0.5 * Vec3((c & 1) ? geo.size.x() : -geo.size.x(),
-                             (c & 2) ? geo.size.y() : -geo.size.y(),
-                             (c & 4) ? geo.size.z() : -geo.size.z()),
+              add(0.5 * Vec3((c & 1) ? sh.box.x() : -sh.box.x(), (c & 2) ? sh.box.y() : -sh.box.y(),
+                             (c & 4) ? sh.box.z() : -sh.box.z()),
                   0.0);
             }
             break;
-          case GeometryType::Cylinder:
+          case ShapeType::Cylinder:
             for (int e = -1; e <= 1; e += 2) {
               for (int k = 0; k < 8; ++k) {
                 const double t = k * M_PI / 4;
-                add(Vec3(geo.size.x() * std::cos(t), geo.size.x() * std::sin(t),
-                         0.5 * e * geo.size.y()),
+                add(Vec3(sh.radius * std::cos(t), sh.radius * std::sin(t), 0.5 * e * sh.length),
                     0.0);
               }
             }
             break;
-          case GeometryType::Mesh:
+          case ShapeType::Capsule:
+            add(Vec3(0, 0, -0.5 * sh.length), sh.radius);
+            add(Vec3(0, 0, 0.5 * sh.length), sh.radius);
+            break;
+          case ShapeType::Mesh:
             break;
         }
       }

@@ -14,9 +14,14 @@ int Model::joint_index(const std::string& joint) const {
   return -1;
 }
 
+std::string frame_name(const std::string& urdf_link) {
+  return !urdf_link.empty() && urdf_link[0] == '/' ? urdf_link.substr(1) : urdf_link;
+}
+
 int Model::link_index(const std::string& link) const {
+  const std::string name = frame_name(link);
   for (size_t k = 0; k < links.size(); ++k) {
-    if (links[k].name == link) return static_cast<int>(k);
+    if (links[k].name == name) return static_cast<int>(k);
   }
   return -1;
 }
@@ -106,12 +111,6 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
   const double inf = std::numeric_limits<double>::infinity();
   m.start_with_base("base", box_inertia(mass_of(0), length));
   m.links.push_back({"base", 0, SE3()});
-  Geometry g;
-  g.type = GeometryType::Box;
-  g.size = Vec3(length, w, w);
-  g.origin = SE3(Mat3::Identity(), Vec3(0.5 * length, 0, 0));
-  m.visuals.push_back(g);
-  m.visual_body.push_back(0);
   // Successive joint axes cycle through the parent's z, y and x directions.
   const Mat3 turns[3] = {Mat3::Identity(),
                          Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitX()).toRotationMatrix(),
@@ -130,8 +129,6 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
     m.damping.push_back(0);
     m.friction.push_back(0);
     m.links.push_back({m.body_name.back(), i, SE3(), i - 1, m.joint_name.back(), false});
-    m.visuals.push_back(g);
-    m.visual_body.push_back(i);
     m.n = i;
   }
   m.finalize();

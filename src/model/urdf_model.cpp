@@ -33,38 +33,6 @@ Mat3 frame_with_z(const Vec3& a) {
   return Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), a).toRotationMatrix();
 }
 
-bool convert_geometry(const urdf::GeometrySharedPtr& g, Geometry& out) {
-  if (!g) return false;
-  switch (g->type) {
-    case urdf::Geometry::BOX: {
-      auto b = std::static_pointer_cast<urdf::Box>(g);
-      out.type = GeometryType::Box;
-      out.size = Vec3(b->dim.x, b->dim.y, b->dim.z);
-      return true;
-    }
-    case urdf::Geometry::CYLINDER: {
-      auto c = std::static_pointer_cast<urdf::Cylinder>(g);
-      out.type = GeometryType::Cylinder;
-      out.size = Vec3(c->radius, c->length, 0);
-      return true;
-    }
-    case urdf::Geometry::SPHERE: {
-      auto s = std::static_pointer_cast<urdf::Sphere>(g);
-      out.type = GeometryType::Sphere;
-      out.size = Vec3(s->radius, 0, 0);
-      return true;
-    }
-    case urdf::Geometry::MESH: {
-      auto m = std::static_pointer_cast<urdf::Mesh>(g);
-      out.type = GeometryType::Mesh;
-      out.mesh = m->filename;
-      out.mesh_scale = Vec3(m->scale.x, m->scale.y, m->scale.z);
-      return true;
-    }
-  }
-  return false;
-}
-
 struct Builder {
   const urdf::ModelInterface& urdf;
   const UrdfOptions& opt;
@@ -75,7 +43,7 @@ struct Builder {
     m.X_tree.push_back(X_tree);
     m.joint_type.push_back(type);
     m.inertia.emplace_back();
-    m.body_name.push_back(j.child_link_name);
+    m.body_name.push_back(frame_name(j.child_link_name));
     m.joint_name.push_back(j.name);
     double lo = -kInf, hi = kInf, eff = kInf, vel = kInf;
     if (j.limits && j.type != urdf::Joint::CONTINUOUS) {
@@ -107,37 +75,14 @@ struct Builder {
   // parent: index in m.links of the URDF parent link (-1 for the root), j the joint from it.
   void add_link_data(const urdf::Link& link, int body, const SE3& O, int parent,
                      const urdf::Joint* j) {
-    m.links.push_back({link.name, body, O, parent, j ? j->name : std::string(),
+    const std::string name = frame_name(link.name);
+    if (m.link_index(name) >= 0) {
+      throw ModelError("link '" + link.name + "': its frame name '" + name +
+                       "' is another link's (a leading '/' is stripped, as tf2 does)");
+    }
+    m.links.push_back({name, body, O, parent, j ? j->name : std::string(),
                        j && j->type == urdf::Joint::FIXED});
     if (link.inertial) add_inertial(link, body, O);
-    auto add_geoms = [&](const auto& arr, const auto& single, std::vector<Geometry>& dst,
-                         std::vector<int>& dst_body, bool visual) {
-      auto add = [&](const auto& v) {
-        if (!v) return;
-        Geometry g;
-        if (!convert_geometry(v->geometry, g)) return;
-        g.origin = O * to_se3(v->origin);
-        g.link = link.name;
-        if constexpr (std::is_same_v<std::decay_t<decltype(*v)>, urdf::Visual>) {
-          urdf::MaterialSharedPtr mat = v->material;
-          if (!mat && !v->material_name.empty()) mat = urdf.getMaterial(v->material_name);
-          if (mat && (mat->color.r + mat->color.g + mat->color.b + mat->color.a) > 0) {
-            g.rgba = Eigen::Vector4d(mat->color.r, mat->color.g, mat->color.b, mat->color.a);
-            g.has_color = true;
-          }
-        }
-        (void)visual;
-        dst.push_back(g);
-        dst_body.push_back(body);
-      };
-      if (!arr.empty()) {
-        for (const auto& v : arr) add(v);
-      } else {
-        add(single);
-      }
-    };
-    add_geoms(link.visual_array, link.visual, m.visuals, m.visual_body, true);
-    add_geoms(link.collision_array, link.collision, m.collisions, m.collision_body, false);
   }
 
   void add_inertial(const urdf::Link& link, int body, const SE3& O) {
@@ -272,7 +217,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.start_with_base(root->name);
+  m.start_with_base(frame_name(root->name));
   for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
   b.visit(*root, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),

@@ -355,7 +355,7 @@ State random_state(const Model& model, unsigned seed) {
   return x;
 }
 
-std::string model_to_urdf(const Model& model) {
+std::string model_to_urdf(const Model& model, const GeometryModel* geometry) {
   std::ostringstream o;
   o.precision(17);
   auto origin = [&](const SE3& f) {
@@ -377,25 +377,26 @@ std::string model_to_urdf(const Model& model) {
         << "\" ixz=\"" << Ic(0, 2) << "\" iyy=\"" << Ic(1, 1) << "\" iyz=\"" << Ic(1, 2)
         << "\" izz=\"" << Ic(2, 2) << "\"/></inertial>\n";
     }
-    for (size_t g = 0; g < model.visuals.size(); ++g) {
-      if (model.visual_body[g] != i) continue;
-      const Geometry& geo = model.visuals[g];
+    for (const GeometryObject& geo : geometry ? geometry->visuals : std::vector<GeometryObject>()) {
+      if (geo.body != i || geo.stand_in) continue;
+      const Shape& sh = geo.shape;
       o << "    <visual>";
-      origin(geo.origin);
+      origin(geo.placement);
       o << "<geometry>";
-      switch (geo.type) {
-        case GeometryType::Box:
-          o << "<box size=\"" << geo.size.x() << ' ' << geo.size.y() << ' ' << geo.size.z()
-            << "\"/>";
+      switch (sh.type) {
+        case ShapeType::Box:
+          o << "<box size=\"" << sh.box.x() << ' ' << sh.box.y() << ' ' << sh.box.z() << "\"/>";
           break;
-        case GeometryType::Cylinder:
-          o << "<cylinder radius=\"" << geo.size.x() << "\" length=\"" << geo.size.y() << "\"/>";
+        case ShapeType::Cylinder:
+        case ShapeType::Capsule:  // URDF has no capsule
+          o << "<cylinder radius=\"" << sh.radius << "\" length=\"" << sh.length << "\"/>";
           break;
-        case GeometryType::Sphere:
-          o << "<sphere radius=\"" << geo.size.x() << "\"/>";
+        case ShapeType::Sphere:
+          o << "<sphere radius=\"" << sh.radius << "\"/>";
           break;
-        case GeometryType::Mesh:
-          o << "<mesh filename=\"" << geo.mesh << "\"/>";
+        case ShapeType::Mesh:
+          o << "<mesh filename=\"" << sh.resource << "\" scale=\"" << sh.scale.x() << ' '
+            << sh.scale.y() << ' ' << sh.scale.z() << "\"/>";
           break;
       }
       o << "</geometry></visual>\n";

@@ -495,7 +495,9 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
-  if (!scene.constraints.empty()) sim->set_constraints(scene.constraints);
+  if (!scene.constraints.empty()) {
+    sim->set_constraints(scene_constraints(scene, sim->model(), urdf_xml));
+  }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }

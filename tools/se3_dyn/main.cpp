@@ -18,7 +18,7 @@ const char* kUsage =
     "           [--dt H] --duration T [--tol E] [--seed S] [--random] [--gravity gx,gy,gz]\n"
     "           [--out traj.csv] [--json]\n"
     "  render (MODEL.urdf [--floating] | --scene S) [--camera ex,ey,ez,tx,ty,tz[,f_px]]\n"
-    "         --out frame.png\n"
+    "         [--package-path DIR[:DIR]] --out frame.png\n"
     "MODEL.urdf may also be chain:N, a generated chain of N bodies (N <= 100000).\n"
     "With both MODEL.urdf and --scene, the model replaces the scene's robot.\n"
     "Limits on sizes and work: docs/robustness.md.\n";

@@ -73,14 +73,20 @@ int cmd_simulate(int argc, char** argv) {
 }
 
 int cmd_render(int argc, char** argv) {
-  const Args args(argc, argv, 2, {"floating"}, {"scene", "camera", "out", "gravity"});
+  const Args args(argc, argv, 2, {"floating"},
+                  {"scene", "camera", "out", "gravity", "package-path"});
   if (!args.has("out")) throw UsageError("--out frame.png is required");
   se3::render::RenderOptions opt;
   std::string err;
   se3::Model model;
+  se3::GeometryModel geometry;
+  // Mesh names: package:// on --package-path, then ROS_PACKAGE_PATH; relative to the URDF.
+  se3::GeometryOptions gopt;
+  gopt.paths.package_path = se3::split_path_list(args.get("package-path"));
   if (args.has("scene")) {
     const se3::Scene scene = se3::load_scene(args.get("scene"));
     model = se3::scene_model(scene);
+    geometry = se3::scene_geometry(scene, model, "", gopt);
     const se3::State s = se3::scene_state(scene, model);
     opt.base = s.base;
     opt.q = s.q;
@@ -95,11 +101,15 @@ int cmd_render(int argc, char** argv) {
     }
   } else {
     model = load_model(args);
+    const std::string& path = args.positional[0];
+    geometry = path.compare(0, 6, "chain:") == 0 ? se3::chain_geometry(model)
+                                                 : se3::geometry_from_urdf_file(model, path, gopt);
   }
+  for (const std::string& w : geometry.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (args.has("camera") && !se3::render::parse_camera_spec(args.get("camera"), opt, &err)) {
     throw UsageError("--camera: " + err);
   }
-  if (se3::render::render_to_png(model, opt, args.get("out"), &err) != 0) {
+  if (se3::render::render_to_png(model, geometry, opt, args.get("out"), &err) != 0) {
     throw InputError(err);
   }
   std::printf("wrote %s\n", args.get("out").c_str());
