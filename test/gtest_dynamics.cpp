@@ -269,7 +269,7 @@ TEST(Dynamics, MomentumConservation) {
           const double qi = s.q[i - 1], qd = s.v[5 + i], qdd = a[5 + i];
           Vec6 S = Vec6::Zero();
           SE3 J;
-          if (m.joint_type[i] == JointType::Revolute) {
+          if (m.joints[i].type == JointType::Revolute) {
             S[2] = 1;
             J.R = Eigen::AngleAxisd(qi, Vec3::UnitZ()).toRotationMatrix();
           } else {
@@ -361,7 +361,7 @@ MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
     Mat3L Rj = Mat3L::Identity();
     Vec3L pj = Vec3L::Zero();
     const LD qi = q[i - 1];
-    if (m.joint_type[i] == JointType::Revolute) {
+    if (m.joints[i].type == JointType::Revolute) {
       Rj << std::cos(qi), -std::sin(qi), 0, std::sin(qi), std::cos(qi), 0, 0, 0, 1;
     } else {
       pj << 0, 0, qi;
@@ -384,7 +384,7 @@ MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
     }
     for (int j = i; j >= 1; j = m.parent[j]) {
       const Vec3L z = R[j].col(2);
-      if (m.joint_type[j] == JointType::Revolute) {
+      if (m.joints[j].type == JointType::Revolute) {
         J.col(off + j - 1) << z, p[j].cross(z);
       } else {
         J.col(off + j - 1) << Vec3L::Zero(), z;

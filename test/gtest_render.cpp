@@ -286,7 +286,8 @@ Model two_body_model() {
   m.n = 2;
   m.nv = 2;
   m.parent = {-1, 0, 1};
-  m.joint_type = {JointType::Revolute, JointType::Revolute, JointType::Revolute};
+  m.joints = {JointModel(JointType::Fixed), JointModel(JointType::Revolute),
+              JointModel(JointType::Revolute)};
   m.X_tree = {SE3(), SE3(Mat3::Identity(), Vec3(0, 0, 0.2)),
               SE3(Mat3::Identity(), Vec3(0, 0, 0.5))};
   m.inertia.assign(3, Inertia::from_com(1.0, Vec3::Zero(), Mat3::Identity() * 0.01));

@@ -4,8 +4,9 @@
 //   xi_i = h sum_j a_ij Kxi_j,  q_i = q + h sum_j a_ij qdot_j,  v_i = v + h sum_j a_ij a_j
 //   f_i  = f exp(xi_i),         a_i = ABA(f_i, q_i, v_i),       Kxi_i = dexp_inv(-xi_i) V0_i
 // and the step ends at f exp(h sum_i b_i Kxi_i) with q and v combined by b. The joint part is
-// the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot,
-// taken from its series for methods of order <= 4 (see series_dexp_).
+// the plain Runge-Kutta method (every joint has nq = nv = 1: q advances with the joint rates, the
+// entries of v after the base's). dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi)
+// xidot, taken from its series for methods of order <= 4 (see series_dexp_).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -100,16 +101,16 @@ class RkmkStepper final : public Stepper {
       if (static_cast<int>(ai.size()) == i) chain_c_[i] = ai[i - 1];
     }
     vbuf_[0] = vbuf_[1] = sum_v_ = VecX::Zero(model.nv);
-    sum_q_ = VecX::Zero(model.n);
+    sum_q_ = VecX::Zero(model.nq);
     kxi_.assign(s_, Vec6::Zero());
     kv_.assign(s_, VecX::Zero(model.nv));
     vs_.assign(s_, VecX::Zero(model.nv));
-    qi_ = VecX::Zero(model.n);
+    qi_ = VecX::Zero(model.nq);
     start_ = State(model);
     trial_ = State(model);
     cache_end_ = State(model);
     cache_tau_ = VecX::Zero(model.nv);
-    err_q_ = VecX::Zero(model.n);
+    err_q_ = VecX::Zero(model.nq);
     err_v_ = VecX::Zero(model.nv);
   }
 
@@ -138,16 +139,15 @@ class RkmkStepper final : public Stepper {
   // dropped, so no stage is stored and no combination pass is left at the end.
   StepInfo step_chain(State& x, const VecX& tau, double h) {
     const bool fl = model_.floating;
-    const int n = model_.n, nv = model_.nv, off = nv - n;
+    const int n = model_.nq, nv = model_.nv, off = model_.nv_base();
     const double *xv = x.v.data(), *xq = x.q.data();
     double *sv = sum_v_.data(), *sq = sum_q_.data();
     const VecX *vi = &x.v, *qi = &x.q;  // the stage point's rates and positions
     Vec6 xi = Vec6::Zero(), sum_xi = Vec6::Zero();
     SE3 fi;  // the stage's base pose (free base)
     for (int i = 0;; ++i) {
-      // The base's slope reads only the stage point, so it is formed before the stage's ABA call:
-      // 0.06-0.15 ABA less per satellite step than after it (paired bench_step runs, 12 of 16
-      // pairs lower). Moving the end pose's exp before the last call too gained nothing.
+      // The base's slope reads only the stage point, so it is formed before the stage's ABA call
+      // (measured faster: docs/performance.md).
       Vec6 kxi = Vec6::Zero();
       if (fl) {
         kxi = i == 0 ? vi->head<6>()
@@ -246,7 +246,7 @@ class RkmkStepper final : public Stepper {
   // v = x.v + h sum_t a_t kv_[j_t] and q = x.q + h sum_t a_t qdot_[j_t] over the terms (one pass
   // over each vector); returns the base's xi = h sum_t a_t kxi_[j_t]. v and q may be x's own.
   Vec6 advance(const State& x, const std::vector<Term>& terms, double h, double* v, double* q) {
-    const int n = model_.n, nv = model_.nv, off = nv - n;
+    const int n = model_.nq, nv = model_.nv, off = model_.nv_base();
     const int T = static_cast<int>(terms.size());
     double c[kMaxStages];
     const double* a[kMaxStages];
@@ -299,7 +299,7 @@ class RkmkStepper final : public Stepper {
   // Returns the scaled RMS error norm (adaptive tableaus; 0 otherwise).
   double attempt(const State& x, const VecX& tau, double h, State& y, StepInfo& info) {
     const bool fl = model_.floating;
-    const int n = model_.n;
+    const int n = model_.nq;
     stages(x, tau, h, info);
     const Vec6 xi = combine(x, h, y);
     if (tab_.b_err.empty()) return 0;

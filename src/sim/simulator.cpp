@@ -20,7 +20,10 @@ KineticEnergyBound::KineticEnergyBound(const Model& model)
     if (i == 0) continue;
     b.parent = model.parent[i];
     b.iv = model.idx_v(i);
-    b.prismatic = model.joint_type[i] == JointType::Prismatic;
+    b.iq = model.idx_q(i);
+    const Vec6 S = model.joints[i].motion_subspace().col(0);  // a one-dof joint
+    b.turn = S.head<3>().norm();
+    b.slide = S.tail<3>().norm();
     b.offset = model.X_tree[i].p.norm();
   }
 }
@@ -39,17 +42,10 @@ double KineticEnergyBound::operator()(const VecX& q, const VecX& v) {
     const Path& up = path_[b.parent];
     Path& p = path_[i];
     const double qd = std::abs(v[b.iv]);
-    if (b.prismatic) {
-      p.L = up.L + b.offset + std::abs(q[i - 1]);
-      p.W = up.W;
-      p.P = up.P;
-      p.S = up.S + qd;
-    } else {
-      p.L = up.L + b.offset;
-      p.W = up.W + qd;
-      p.P = up.P + qd * p.L;
-      p.S = up.S;
-    }
+    p.L = up.L + b.offset + b.slide * std::abs(q[b.iq]);
+    p.W = up.W + b.turn * qd;
+    p.P = up.P + b.turn * qd * p.L;
+    p.S = up.S + b.slide * qd;
     const double r = p.L + b.com;  // base origin to the centre of mass, at most
     // sum_j |qdot_j| (r - L_j) over the revolute joints j on the path: r W - P.
     const double vc = v0 + w0 * r + (r * p.W - p.P) + p.S;
@@ -139,7 +135,7 @@ double Simulator::set_joint_effort(int i, double effort) {
   if (i < 1 || i > model_->n) throw std::out_of_range("joint index out of range");
   const double lim = model_->effort[i];
   if (std::isfinite(lim) && lim > 0) effort = std::min(lim, std::max(-lim, effort));
-  command_[(model_->floating ? 6 : 0) + i - 1] = effort;
+  command_[model_->idx_v(i)] = effort;
   return effort;
 }
 
@@ -168,14 +164,11 @@ void Simulator::clear_command() {
 }
 
 void Simulator::applied_joint_efforts(VecX& out) {
-  const int off = model_->floating ? 6 : 0;
   out.resize(model_->n);
-  for (int i = 0; i < model_->n; ++i) out[i] = command_[off + i];
-  const StepperOptions& o = stepper_->options();
-  if (!o.passive_forces) return;
+  const PassiveForces& passive = stepper_->passive();
   for (int i = 1; i <= model_->n; ++i) {
-    const double qd = state_.v[off + i - 1];
-    out[i - 1] -= model_->damping[i] * qd + model_->friction[i] * std::tanh(qd / o.friction_eps);
+    const int k = model_->idx_v(i);
+    out[i - 1] = passive.at(k, command_[k], state_.v[k]);
   }
 }
 
