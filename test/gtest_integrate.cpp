@@ -294,6 +294,32 @@ TEST(Rkmk4, StepEqualsRkmk4WrittenOutStageByStage) {
   }
 }
 
+// Classical RK4 runs through its one-pass fast path (step_chain) by default and through the
+// general tableau path on request: both read the same tableau, and give the same steps to
+// rounding (fixed and free base, gravity, damping and friction, commands).
+TEST(Rkmk4, FastPathAndGeneralPathRunTheSameTableau) {
+  for (const bool floating : {false, true}) {
+    Model m = make_chain(6, floating, {2.0, 1.0, 0.5});
+    for (int i = 1; i <= m.n; ++i) {
+      m.damping[i] = 0.1 * i;
+      m.friction[i] = i % 2 ? 0.05 : 0.0;
+    }
+    State fast = random_state(m, 12), general = fast;
+    VecX tau = VecX::Zero(m.nv);
+    for (int k = 0; k < m.nv; ++k) tau[k] = 0.2 * std::cos(k + 1.0);
+    ButcherTableau t = tableau_rk4();
+    auto a = make_rkmk_stepper(t, m, {});
+    t.fast_path = false;
+    auto b = make_rkmk_stepper(t, m, {});
+    for (int k = 0; k < 200; ++k) {
+      ASSERT_TRUE(a->step(fast, tau, 0.005).ok);
+      ASSERT_TRUE(b->step(general, tau, 0.005).ok);
+    }
+    EXPECT_GT(state_err(fast, random_state(m, 12)), 0.1);  // it moved
+    EXPECT_LE(state_err(fast, general), 1e-13) << floating;
+  }
+}
+
 // A tableau whose stages read more than the previous stage (Kutta's 3/8 rule) takes the general
 // RKMK path; it too is fourth order on a free-floating chain.
 TEST(Convergence, ThreeEighthsRuleThroughTheGeneralTableauPathIsFourthOrder) {

@@ -165,6 +165,11 @@ struct ButcherTableau {
   std::vector<double> b_err;
   /// First-same-as-last: the last stage is evaluated at the step's end point.
   bool fsal = false;
+  /// A fixed-step tableau whose stage i reads only stage i - 1 (classical RK4) runs in one pass
+  /// that feeds each slope into the weighted sum and the next stage point (fewer instructions
+  /// per step: docs/performance.md); false runs it through the general path, as every other
+  /// tableau. The two give the same step to rounding (gtest_integrate).
+  bool fast_path = true;
 };
 ButcherTableau tableau_rk4();
 ButcherTableau tableau_dormand_prince45();

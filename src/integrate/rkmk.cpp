@@ -93,7 +93,7 @@ class RkmkStepper final : public Stepper {
                                   std::to_string(kMaxStages) + " stages");
     }
     series_dexp_ = tab_.order <= 4;
-    chain_ = !adaptive();
+    chain_ = tab_.fast_path && !adaptive();
     chain_c_.assign(s_, 0.0);
     for (int i = 1; i < s_; ++i) {
       const auto& ai = tab_.a[i];
