@@ -5,18 +5,15 @@
 // - local frames (shallow trees: arms, legged robots): composite inertias Ic_p += Ad* Ic_i Ad^-1
 //   through the joint transforms (no forward kinematics), F_i = Ic_i S_i, and D_ji = S_j^T F_i
 //   as F_i travels inward through every ancestor j. The columns of a subtree are contiguous,
-//   so the whole block of F's travels at once, two columns per SSE2 register.
+//   so the whole block of F's travels at once.
 // - world frame (deep chains): composite inertias add without transforms, and
 //   D_ji = S_j^T (Ic_i S_i) with world axes, six multiply-adds per entry instead of a wrench
 //   transform per entry.
 #include "joint.h"
+#include "row_kernel.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
-
-using detail::load2;
-using detail::store2;
-using detail::v2d;
 
 namespace {
 
@@ -49,14 +46,7 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     if (!carry) continue;
     const double* R = data.Xup[i].R.data();
     const double* t = data.Xup[i].p.data();
-    int c = col;
-    for (; c + 2 <= end; c += 2) {
-      v2d x[6];
-      for (int r = 0; r < 6; ++r) x[r] = load2(F[r] + c);
-      detail::force_to_parent(R, t, x);
-      for (int r = 0; r < 6; ++r) store2(F[r] + c, x[r]);
-    }
-    if (c < end) {
+    for (int c = col; c < end; ++c) {
       double x[6];
       for (int r = 0; r < 6; ++r) x[r] = F[r][c];
       detail::force_to_parent(R, t, x);
@@ -110,6 +100,7 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
     double Fv[6];
     detail::inertia_times(Ic, S, Fv);
     const double F0 = Fv[0], F1 = Fv[1], F2 = Fv[2], F3 = Fv[3], F4 = Fv[4], F5 = Fv[5];
+    const double* const Jc[6] = {J[0], J[1], J[2], J[3], J[4], J[5]};
     // D(j, i) = S_j . F for every ancestor j of i (and j = i), written to both triangles.
     // Ancestors come in runs of consecutive indices (a chain is a single run); column i above
     // the diagonal is contiguous in column-major storage.
@@ -118,20 +109,7 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
     while (j > 0) {
       const int s = data.run_start[j];
       const int c0 = v1 + s, c1 = v1 + j + 1;  // the run s..j
-      int c = c0;
-      for (; c + 2 <= c1; c += 2) {  // two entries per step, one SSE2 register
-        const v2d x = F0 * load2(J[0] + c) + F1 * load2(J[1] + c) + F2 * load2(J[2] + c) +
-                      F3 * load2(J[3] + c) + F4 * load2(J[4] + c) + F5 * load2(J[5] + c);
-        store2(mcol + c, x);
-        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x[0];
-        M[col + static_cast<std::ptrdiff_t>(c + 1) * nv] = x[1];
-      }
-      if (c < c1) {
-        const double x =
-            F0 * J[0][c] + F1 * J[1][c] + F2 * J[2][c] + F3 * J[3][c] + F4 * J[4][c] + F5 * J[5][c];
-        mcol[c] = x;
-        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x;
-      }
+      detail::row_segment(Fv, Jc, c0, c1, mcol, M + col, nv);
       j = model.parent[s];
     }
     if (model.floating) {  // the base rows: S_0 = 1 in the base frame, Ad*_{f0}^-1 F

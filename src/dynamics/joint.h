@@ -8,7 +8,6 @@
 
 #include <cmath>
 
-#include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
@@ -133,10 +132,9 @@ inline void child_twist(J, const SE3& Xup, const double* Vp, double qd, double* 
 }
 
 /// x <- Ad*_{f^-1} x for wrenches x = (n0, n1, n2, f0, f1, f2) given by R, p of f (eq. 19:
-/// (R n + p x R f, R f)); T is double, or v2d for two wrenches at once.
-template <class T>
-inline void force_to_parent(const double* R, const double* p, T (&x)[6]) {
-  T f[3], n[3];
+/// (R n + p x R f, R f)).
+inline void force_to_parent(const double* R, const double* p, double (&x)[6]) {
+  double f[3], n[3];
   for (int r = 0; r < 3; ++r) {
     f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
     n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];

@@ -187,36 +187,25 @@ class RkmkStepper final : public Stepper {
   // sum = (add ? sum : 0) + b z and next = x + c z, in one pass over z.
   static void feed(int n, const double* z, double b, double* sum, bool add, double c,
                    const double* x, double* next) {
-    using detail::load2;
-    using detail::store2;
-    int k = 0;
     if (add) {
-      for (; k + 2 <= n; k += 2) {
-        const detail::v2d zk = load2(z + k);
-        store2(sum + k, load2(sum + k) + b * zk);
-        store2(next + k, load2(x + k) + c * zk);
+      for (int k = 0; k < n; ++k) {
+        const double zk = z[k];
+        sum[k] += b * zk;
+        next[k] = x[k] + c * zk;
       }
-      if (k < n) sum[k] += b * z[k];
     } else {
-      for (; k + 2 <= n; k += 2) {
-        const detail::v2d zk = load2(z + k);
-        store2(sum + k, b * zk);
-        store2(next + k, load2(x + k) + c * zk);
+      for (int k = 0; k < n; ++k) {
+        const double zk = z[k];
+        sum[k] = b * zk;
+        next[k] = x[k] + c * zk;
       }
-      if (k < n) sum[k] = b * z[k];
     }
-    if (k < n) next[k] = x[k] + c * z[k];
   }
 
   // y += (add ? sum : 0) + b z.
   static void add_sum(int n, double b, const double* z, const double* sum, bool add, double* y) {
     if (!add) return detail::axpy(n, b, z, y);
-    int k = 0;
-    for (; k + 2 <= n; k += 2) {
-      detail::store2(y + k,
-                     detail::load2(y + k) + (detail::load2(sum + k) + b * detail::load2(z + k)));
-    }
-    if (k < n) y[k] += sum[k] + b * z[k];
+    for (int k = 0; k < n; ++k) y[k] += sum[k] + b * z[k];
   }
 
   // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when

@@ -35,14 +35,10 @@ namespace {
 inline void apply_passive(const PassiveForces& p, const double* base, const double* w, double* o) {
   const int nv = static_cast<int>(p.damping().size());
   const double* d = p.damping().data();
-  int k = 0;
   if (base) {
-    for (; k + 2 <= nv; k += 2) {
-      detail::store2(o + k, detail::load2(base + k) - detail::load2(d + k) * detail::load2(w + k));
-    }
-    if (k < nv) o[k] = base[k] - d[k] * w[k];
+    for (int k = 0; k < nv; ++k) o[k] = base[k] - d[k] * w[k];
   } else {
-    for (; k < nv; ++k) o[k] = -d[k] * w[k];
+    for (int k = 0; k < nv; ++k) o[k] = -d[k] * w[k];
   }
   const double inv_eps = p.inv_eps();
   for (const PassiveForces::Rubbing& j : p.rubbing()) o[j.k] -= j.f * std::tanh(w[j.k] * inv_eps);
