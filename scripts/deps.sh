@@ -11,7 +11,8 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   python3-rostest librostest-dev libgtest-dev python3-rostopic python3-tf2-msgs python3-sensor-msgs python3-std-msgs python3-rospy
   python3-rosservice python3-roslaunch python3-std-srvs)
 if [[ "${1:-}" == "--test" ]]; then
-  pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev)
+  pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
+    g++-aarch64-linux-gnu)
 fi
 missing=()
 for p in "${pkgs[@]}"; do

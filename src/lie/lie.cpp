@@ -10,9 +10,9 @@ namespace {
 
 // Below t = 1 (t^2 < kSeries2) the trigonometric coefficients are evaluated by their Taylor
 // series in t^2, which need neither sqrt nor division and are exact where the closed forms
-// cancel: (t - sin t)/t^3 loses about log10(6/t^2) digits, and the coupling coefficients of dexp
-// lost up to 100 ulp of dexp at t = 0.1, the former switch. From t = 1 on the cancellation costs
-// at most two digits of a coefficient that the maps multiply by t^3 or more, and dexp stays
+// cancel: (t - sin t)/t^3 loses about log10(6/t^2) digits, and the closed-form coupling
+// coefficients of dexp lose up to 100 ulp of dexp near t = 0.1. From t = 1 on the cancellation
+// costs at most two digits of a coefficient that the maps multiply by t^3 or more, and dexp stays
 // within 1e-15 (gtest_lie). Each series stops where the next term is below 1e-17 relative at
 // t = 1.
 constexpr double kSeries2 = 1.0;
