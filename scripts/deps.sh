@@ -7,12 +7,12 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   libsensor-msgs-dev ros-sensor-msgs libgeometry-msgs-dev ros-geometry-msgs
   libvisualization-msgs-dev ros-visualization-msgs libros-rosgraph-msgs-dev ros-rosgraph-msgs
   libtf2-ros-dev libtf2-msgs-dev ros-tf2-msgs ros-message-generation
-  liburdfdom-dev libeigen3-dev libcairo2-dev libbenchmark-dev
+  liburdfdom-dev libeigen3-dev libcairo2-dev libbenchmark-dev libyaml-cpp-dev
   python3-rostest librostest-dev libgtest-dev python3-rostopic python3-tf2-msgs python3-sensor-msgs python3-std-msgs python3-rospy
   python3-rosservice python3-roslaunch python3-std-srvs)
 if [[ "${1:-}" == "--test" ]]; then
   pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
-    g++-aarch64-linux-gnu)
+    ros-robot-state-publisher g++-aarch64-linux-gnu)
 fi
 missing=()
 for p in "${pkgs[@]}"; do

@@ -16,8 +16,20 @@ import sys
 import xml.etree.ElementTree as ET
 
 
+def skip_reason(root):
+    """rosunit records a Python test's skipTest as a pass; such tests print a line 'SKIPPED:
+    reason' (test/distributed_check.py), which is taken here as the skip it is."""
+    for out in root.iter('system-out'):
+        for line in (out.text or '').splitlines():
+            line = line.strip().replace('<![CDATA[', '')
+            if line.startswith('SKIPPED:'):
+                return line[len('SKIPPED:'):].strip()
+    return None
+
+
 def cases(path):
     root = ET.parse(path).getroot()
+    skipped_because = skip_reason(root)
     for tc in root.iter('testcase'):
         name = '%s.%s' % (tc.get('classname', ''), tc.get('name', ''))
         if tc.find('failure') is not None or tc.find('error') is not None:
@@ -27,6 +39,8 @@ def cases(path):
         elif tc.find('skipped') is not None or tc.get('result') == 'skipped' \
                 or tc.get('status') == 'notrun':
             yield name, 'skipped', ''
+        elif skipped_because:
+            yield name, 'skipped', skipped_because
         else:
             yield name, 'passed', ''
 
@@ -53,6 +67,8 @@ def main():
                     passed += 1
                 elif status == 'skipped':
                     skipped += 1
+                    if msg:
+                        print('SKIPPED %s: %s  [%s]' % (name, msg[:200], base))
                 else:
                     failed += 1
                     print('FAILED  %s: %s  [%s]' % (name, msg[:200], base))

@@ -3,8 +3,8 @@
 
 The camera is level (eye and target at the same height), so the horizon is the middle row and
 each sky row has one colour. Every link with visual geometry that the simulator publishes on
-/tf and whose origin projects into the sky (above the horizon, inside the image) must be drawn
-there: its pixel differs from that row's sky colour, read at the image's right edge. Frames
+TF (a tree: /tf and /tf_static, composed up to world) and whose origin projects into the sky
+(above the horizon, inside the image) must be drawn there: its pixel differs from that row's sky colour, read at the image's right edge. Frames
 without geometry (panda_hand_tcp, a point between the finger tips) can lie over the sky. The image is read as raw bytes
 (rospy.AnyMsg), so no Python sensor_msgs package is needed.
 """
@@ -19,6 +19,7 @@ import rostest
 from tf2_msgs.msg import TFMessage
 
 from image_check_util import H, W, Camera, parse_image, px
+from tf_tree_util import TfTree
 
 CAMERA = Camera((3.0, -3.0, 1.2), (0.0, 0.0, 1.2), 900.0)  # as in demo.test
 
@@ -28,20 +29,18 @@ class DemoImageTest(unittest.TestCase):
         self.drawn = None  # links with visual geometry, once the simulator has published them
         self.lock = threading.Lock()
         self.image = None
-        self.links = {}
+        self.tree = TfTree()
         rospy.Subscriber("renderer/image", rospy.AnyMsg, self.on_image, queue_size=1)
         rospy.Subscriber("/tf", TFMessage, self.on_tf, queue_size=10)
+        rospy.Subscriber("/tf_static", TFMessage, self.on_tf, queue_size=10)
 
     def on_image(self, msg):
         with self.lock:
-            self.image = (time.time(), bytes(msg._buff), dict(self.links))
+            self.image = (time.time(), bytes(msg._buff), self.tree.world_positions())
 
     def on_tf(self, msg):
         with self.lock:
-            for t in msg.transforms:
-                if t.header.frame_id == "world":
-                    tr = t.transform.translation
-                    self.links[t.child_frame_id] = (tr.x, tr.y, tr.z)
+            self.tree.add(msg)
 
     @staticmethod
     def px(data, u, v):

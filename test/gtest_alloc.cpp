@@ -269,6 +269,37 @@ TEST(Alloc, LongChainSimulatorNeedsLinearMemory) {
   }
 }
 
+// With controllers (position PID and effort), expiring torque commands and link wrenches, on a
+// free base with ground contact too: a step still allocates nothing.
+TEST(Alloc, SimulatorStepsWithControllersCommandsAndWrenches) {
+  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  for (const char* file : {"fixed_panda.yaml", "quadruped_ground.yaml"}) {
+    SCOPED_TRACE(file);
+    auto sim = make_simulator(load_scene(scenes + file));
+    if (!sim->controllers()) {
+      sim->set_controllers(parse_controllers_text(R"(
+arm: {type: effort_controllers/JointGroupPositionController, joints: [panda_joint1, panda_joint2],
+      pid: {p: 100, i: 10, d: 5, i_clamp: 10}}
+wrist: {type: effort_controllers/JointEffortController, joint: panda_joint7}
+)"));
+    }
+    sim->set_command_timeout(0.01);
+    sim->set_joint_effort(1, 0.5);
+    sim->apply_link_wrench(2, Vec3(0.01, 0, 0), Vec6::Constant(0.1), 0.05);
+    sim->apply_link_wrench(1, Vec3::Zero(), Vec6::Constant(0.1), -1);
+    ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
+    std::vector<double> c = sim->controllers()->command(0);
+    EXPECT_EQ(allocations_of([&] {
+                sim->set_joint_effort(1, 0.4);
+                c[0] += 0.1;
+                EXPECT_TRUE(sim->controllers()->set_command(0, c.data(), c.size()).empty());
+                EXPECT_EQ(sim->step_n(100), 100) << sim->failure();
+              }),
+              0);
+    EXPECT_EQ(sim->link_wrench_count(), 1);  // the timed one ran out inside, without allocating
+  }
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -365,8 +365,12 @@ TEST(Contact, BoxOnTwentyDegreeSlopeSlidesWithMuPointTwo) {
 }
 
 TEST(Contact, Solo12DroppedStandsStillWithoutDeepPenetration) {
-  // Stated depth: 1 mm (slop 0.1 mm plus the landing transient).
-  const Scene sc = load_scene(path("config/scenes/quadruped_ground.yaml"));
+  // Stated depth: 1 mm (slop 0.1 mm plus the landing transient). The legs locked in the scene's
+  // standing posture (the scene holds them with a position controller instead).
+  Scene sc = load_scene(path("config/scenes/quadruped_ground.yaml"));
+  sc.locked_joints = sc.initial_positions;
+  sc.initial_positions.clear();
+  sc.controllers.clear();
   auto sim = make_simulator(sc);
   const RunStats s = run(*sim, 3.0);
   EXPECT_TRUE(s.ok);
@@ -395,10 +399,7 @@ TEST(Contact, Solo12WithFreeJointsFallsAndComesToRest) {
   // Joints free (zero torque): the legs fold, knees and base corners land; friction and the
   // inelastic impacts take the energy out. Stated depth: 2 mm.
   Scene sc = load_scene(path("config/scenes/quadruped_ground.yaml"));
-  std::vector<std::pair<std::string, double>> init;
-  for (const auto& kv : sc.locked_joints) init.push_back(kv);
-  sc.initial_positions = init;
-  sc.locked_joints.clear();
+  sc.controllers.clear();  // from the standing posture, nothing holding the joints
   auto sim = make_simulator(sc);
   EXPECT_EQ(sim->model().n, 12);
   const RunStats s = run(*sim, 4.0);

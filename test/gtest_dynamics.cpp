@@ -229,7 +229,7 @@ TEST(Dynamics, GravityIsTheGradientOfThePotential) {
     const VecX zero = VecX::Zero(m.nv);
     const VecX G = rnea(m, d, s.base, s.q, zero, zero);
     VecX grad(m.nv);
-    const int off = m.floating ? 6 : 0;
+    const int off = m.nv_base();
     for (int k = 0; k < m.nv; ++k) {
       auto V = [&](double e) {
         if (k < off) return potential_energy(m, d, s.base * exp_se3(e * Vec6::Unit(k)), s.q);
@@ -351,7 +351,7 @@ Mat3L hat_ld(const Vec3L& a) {
 // The mass matrix assembled in long double straight from the model, independently of crba:
 // D = sum_i J_i^T I_i J_i with world-frame body Jacobians J_i and world-frame inertias I_i.
 MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
-  const int off = m.floating ? 6 : 0;
+  const int off = m.nv_base();
   std::vector<Mat3L> R(m.n + 1);
   std::vector<Vec3L> p(m.n + 1);
   R[0] = base.R.cast<LD>();
@@ -502,6 +502,27 @@ TEST(Dynamics, CrbaPicksItsEvaluationByDepth) {
     if (c.label.find("solo12") != std::string::npos || c.label.find("ur5") != std::string::npos) {
       EXPECT_TRUE(Data(c.model).crba_local) << c.label;
     }
+  }
+}
+
+// ABA's documented contract, which RKMK's stage poses rely on (rkmk.cpp, stage_pose): the base
+// pose enters only through its rotation (gravity's direction in the base frame), and not at all
+// without gravity. Bit-identical accelerations, fixed and free base.
+TEST(Dynamics, AbaReadsTheBasePoseOnlyThroughGravity) {
+  for (bool floating : {false, true}) {
+    Model m = make_chain(7, floating, {2.0, 1.0});
+    Data d(m);
+    std::mt19937_64 rng(31);
+    const RandomState s = se3_test::random_state(m, rng);
+    const SE3 moved(s.base.R, s.base.p + Vec3(3.0, -1.0, 2.5));
+    const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+    EXPECT_EQ(aba(m, d, moved, s.q, s.v, s.u), a) << floating;
+    const SE3 turned(exp_so3(Vec3(0.4, -0.3, 1.1)) * s.base.R, s.base.p);
+    EXPECT_NE(aba(m, d, turned, s.q, s.v, s.u), a) << floating;  // gravity turned
+    m.gravity.setZero();
+    const VecX a0 = aba(m, d, s.base, s.q, s.v, s.u);
+    EXPECT_EQ(aba(m, d, turned, s.q, s.v, s.u), a0) << floating;
+    EXPECT_EQ(aba(m, d, moved, s.q, s.v, s.u), a0) << floating;
   }
 }
 

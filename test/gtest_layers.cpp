@@ -33,6 +33,11 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/render/raster.h", "render"},
     {"se3_sim/teleop.h", "teleop"},
     {"se3_sim/sim.h", "sim"},
+    {"se3_sim/controllers.h", "sim"},
+    {"se3_sim/ros/convert.h", "ros"},
+    {"se3_sim/ros/params.h", "ros"},
+    {"se3_sim/ros/simulator_node.h", "ros"},
+    {"se3_sim/ros/teleop_node.h", "ros"},
 };
 
 // What each layer may include: itself and the layers below it.
@@ -44,6 +49,7 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"render", {"lie", "model", "dynamics", "render"}},
     {"teleop", {"lie", "model", "teleop"}},
     {"sim", {"lie", "model", "dynamics", "integrate", "sim"}},
+    {"ros", {"lie", "model", "dynamics", "integrate", "sim", "render", "teleop", "ros"}},
 };
 
 // The files of a layer: its public headers and src/<layer>/.
@@ -82,6 +88,12 @@ TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
     EXPECT_FALSE(files.empty()) << layer;
     for (const fs::path& f : files) {
       for (const std::string& inc : quoted_includes(f)) {
+        static const std::regex message_re(R"re(^se3_sim/[A-Z][A-Za-z]*\.h$)re");
+        if (std::regex_search(inc, message_re)) {  // generated messages: the ros layer's
+          ++checked;
+          EXPECT_TRUE(la.second.count("ros")) << f << " (layer " << layer << ") includes " << inc;
+          continue;
+        }
         const auto it = kHeaderLayer.find(inc);
         if (it == kHeaderLayer.end()) {
           // Anything else must be a file of the same directory (a layer's internal header).
@@ -96,6 +108,28 @@ TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
     }
   }
   EXPECT_GT(checked, 20);
+}
+
+// roscpp and ROS messages only in the ros layer (src/ros, include/se3_sim/ros) and the nodes:
+// the library builds and is tested without them.
+TEST(Layers, OnlyTheRosLayerIncludesRos) {
+  const fs::path root = SE3_SIM_SOURCE_DIR;
+  static const std::regex ros_re(
+      R"re(^\s*#\s*include\s*[<"](ros|tf2_ros|tf2_msgs|std_msgs|std_srvs|sensor_msgs|geometry_msgs|visualization_msgs|rosgraph_msgs|xmlrpcpp|image_transport|se3_sim/[A-Z][A-Za-z]*\.h)[/">])re");
+  int files = 0;
+  for (const auto& la : kAllowed) {
+    if (la.first == "ros") continue;
+    for (const fs::path& f : layer_files(root, la.first)) {
+      ++files;
+      std::ifstream in(f);
+      std::string line;
+      while (std::getline(in, line)) {
+        EXPECT_FALSE(std::regex_search(line, ros_re))
+            << f << " (layer " << la.first << ") includes ROS: " << line;
+      }
+    }
+  }
+  EXPECT_GT(files, 30);
 }
 
 }  // namespace

@@ -1,13 +1,17 @@
 // rostest node for simulator_node (test/simulator.test): rates of joint_states and TF, every
-// link in TF, the scene's bus on sim_markers, torque commands by name, rejection of bad commands,
-// stale commands, and the reset/pause/resume/step services. Comparisons of motion are made between
-// runs from the same reset state advanced by the step service, so they do not depend on
-// wall-clock timing.
+// link in TF, the scene's bus on sim_markers, torque commands by name and merged per joint
+// (also from a second node), rejection of bad commands, commands that expire in simulated time,
+// the reset/pause/resume/step services, set_state and apply_wrench with their refusals.
+// Comparisons of motion are made between runs from the same reset state advanced by the step
+// service, so they do not depend on wall-clock timing.
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
-#include <std_srvs/Empty.h>
+#include <std_srvs/Trigger.h>
+#include <sys/types.h>
+#include <sys/wait.h>
 #include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <atomic>
@@ -17,8 +21,10 @@
 #include <mutex>
 #include <set>
 
+#include "se3_sim/ApplyWrench.h"
 #include "se3_sim/ChainState.h"
 #include "se3_sim/JointTorques.h"
+#include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
 #include "se3_sim/lie.h"
@@ -51,6 +57,10 @@ struct Listener {
     tf_times.push_back(ros::WallTime::now().toSec());
     for (const auto& t : m->transforms) tf_frames.insert(t.child_frame_id);
   }
+  void on_tf_static(const tf2_msgs::TFMessage::ConstPtr& m) {
+    std::lock_guard<std::mutex> l(mu);
+    for (const auto& t : m->transforms) tf_frames.insert(t.child_frame_id);
+  }
   void on_cs(const se3_sim::ChainState::ConstPtr& m) {
     std::lock_guard<std::mutex> l(mu);
     last_cs = *m;
@@ -72,14 +82,15 @@ struct Listener {
 
 Listener* g = nullptr;
 double g_rate = 100.0;
+ros::Publisher g_pub;  // torque_command
 
 void wait(double s) {
   ros::WallDuration(s).sleep();
 }
 
 bool call_empty(const std::string& name) {
-  std_srvs::Empty e;
-  return ros::service::call(name, e);
+  std_srvs::Trigger e;
+  return ros::service::call(name, e) && e.response.success;
 }
 
 se3_sim::Step::Response step(unsigned n) {
@@ -128,6 +139,7 @@ double rate_of(const std::vector<double>& t) {
 
 }  // namespace
 
+// Every link is in TF: moving joints' links on /tf, fixed ones on /tf_static (latched).
 TEST(Simulator, PublishesJointStatesAndEveryLinkInTfAtTheRate) {
   {
     std::lock_guard<std::mutex> l(g->mu);
@@ -243,7 +255,9 @@ TEST(Simulator, BadCommandsAreRejectedCountedAndDoNotAct) {
   EXPECT_FALSE(g->nan_seen);
 }
 
-TEST(Simulator, StaleCommandsStopActing) {
+// A command acts for ~command_timeout of simulated time: a paused simulation keeps it however
+// long the wall clock runs, and it stops acting once the simulation has stepped that long.
+TEST(Simulator, CommandsExpireInSimulatedTimeAndAPausedSimulationKeepsThem) {
   ros::NodeHandle nh;
   ros::Publisher pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
   wait(0.5);
@@ -255,8 +269,167 @@ TEST(Simulator, StaleCommandsStopActing) {
   cmd.effort = {20.0};
   const auto fresh = run_from_reset(pub, &cmd, 100);
   EXPECT_GT(fresh.at("panda_joint4") - base.at("panda_joint4"), 1e-3);
-  const auto stale = run_from_reset(pub, &cmd, 100, timeout + 0.3);
-  EXPECT_EQ(stale.at("panda_joint4"), base.at("panda_joint4"));
+  // Longer than the timeout on the wall clock, paused: still acts, exactly as the fresh one.
+  const auto kept = run_from_reset(pub, &cmd, 100, timeout + 0.3);
+  EXPECT_EQ(kept.at("panda_joint4"), fresh.at("panda_joint4"));
+  // Stepped past the timeout: the effort in joint_states is back to the damping alone.
+  const auto r = step(static_cast<unsigned>(std::lround(timeout / 0.001)) + 5);
+  EXPECT_TRUE(r.success) << r.message;
+  wait(3.0 / g_rate);
+  {
+    std::lock_guard<std::mutex> l(g->mu);
+    for (size_t k = 0; k < g->last_js.name.size(); ++k) {
+      if (g->last_js.name[k] == "panda_joint4") {
+        EXPECT_LT(std::abs(g->last_js.effort[k]), 0.1);
+      }
+    }
+  }
+  EXPECT_TRUE(call_empty("simulator/resume"));
+}
+
+namespace {
+
+/// Effort of a joint in the latest joint_states.
+double effort_of(const std::string& joint) {
+  wait(3.0 / g_rate);
+  std::lock_guard<std::mutex> l(g->mu);
+  for (size_t k = 0; k < g->last_js.name.size(); ++k) {
+    if (g->last_js.name[k] == joint) return g->last_js.effort[k];
+  }
+  ADD_FAILURE() << "no " << joint << " in joint_states";
+  return 0;
+}
+
+/// A second node: rostopic publishing a torque command at 20 Hz until killed.
+pid_t start_rostopic_pub(const std::string& yaml) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execlp("rostopic", "rostopic", "pub", "-r", "20", "torque_command", "se3_sim/JointTorques",
+           yaml.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+}  // namespace
+
+// Two nodes commanding different joints both act: each message sets the joints it names and
+// leaves the others as they were.
+TEST(Simulator, TwoNodesOnDifferentJointsBothAct) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
+  EXPECT_TRUE(call_empty("simulator/pause"));
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  const pid_t other = start_rostopic_pub("{name: [panda_joint7], effort: [1.5]}");
+  ASSERT_GT(other, 0);
+  // Wait until the other node's command is in (its effort shows in joint_states).
+  double e7 = 0;
+  for (int k = 0; k < 60 && std::abs(e7 - 1.5) > 0.01; ++k) {
+    wait(0.1);
+    e7 = effort_of("panda_joint7");
+  }
+  EXPECT_NEAR(e7, 1.5, 0.01) << "the second node's command did not arrive";
+  se3_sim::JointTorques cmd;
+  cmd.name = {"panda_joint4"};
+  cmd.effort = {-5.0};
+  for (int k = 0; k < 5; ++k) {
+    pub.publish(cmd);
+    wait(0.05);
+  }
+  // Paused at the initial state: the commands less the damping at the initial rates (3e-3 N m s
+  // times at most 0.3 rad/s).
+  EXPECT_NEAR(effort_of("panda_joint4"), -5.0, 1e-3);
+  EXPECT_NEAR(effort_of("panda_joint7"), 1.5, 1e-3);
+  kill(other, SIGINT);
+  waitpid(other, nullptr, 0);
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  EXPECT_TRUE(call_empty("simulator/resume"));
+}
+
+// simulator/set_state (Gazebo's set_model_configuration / set_model_state) sets what it names
+// and refuses, with the reason, what it cannot; apply_wrench pushes a link for a duration.
+TEST(Simulator, SetStateAndApplyWrenchAnswerRefusalsAsRefusals) {
+  EXPECT_TRUE(call_empty("simulator/pause"));
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  se3_sim::SetState s;
+  s.request.name = {"panda_joint4", "panda_joint2"};
+  s.request.position = {-1.0, 0.25};
+  s.request.set_base_pose = true;
+  s.request.base_pose.position.x = 0.5;
+  s.request.base_pose.position.z = 2.0;
+  s.request.base_pose.orientation.w = 1.0;
+  ASSERT_TRUE(ros::service::call("simulator/set_state", s));
+  EXPECT_TRUE(s.response.success) << s.response.message;
+  ASSERT_TRUE(step(1).success);
+  {
+    const auto p = fresh_positions();
+    EXPECT_NEAR(p.at("panda_joint4"), -1.0, 1e-3);
+    EXPECT_NEAR(p.at("panda_joint2"), 0.25, 1e-3);
+    std::lock_guard<std::mutex> l(g->mu);
+    EXPECT_NEAR(g->last_cs.base_pose.position.x, 0.5, 1e-3);
+    EXPECT_NEAR(g->last_cs.base_pose.position.z, 2.0, 1e-3);
+  }
+  auto refused = [](se3_sim::SetState::Request req, const std::string& why) {
+    se3_sim::SetState c;
+    c.request = req;
+    ASSERT_TRUE(ros::service::call("simulator/set_state", c));
+    EXPECT_FALSE(c.response.success) << why;
+    EXPECT_NE(c.response.message.find(why), std::string::npos) << c.response.message;
+  };
+  se3_sim::SetState::Request r;
+  r.name = {"nope"};
+  r.position = {0};
+  refused(r, "unknown joint 'nope'");
+  r.name = {"panda_finger_joint1"};
+  refused(r, "locked");
+  r.name = {"panda_joint4"};
+  r.position = {5.0};
+  refused(r, "outside its limits");
+  r.position = {std::nan("")};
+  refused(r, "non-finite");
+  r.position = {-1.0, 2.0};
+  refused(r, "lengths differ");
+  r = se3_sim::SetState::Request();
+  r.set_base_pose = true;
+  r.base_pose.orientation.w = 2.0;
+  refused(r, "not a unit quaternion");
+  // apply_wrench: a force on the hand moves the arm; refusals say why.
+  const auto before = run_from_reset(g_pub, nullptr, 100);
+  se3_sim::ApplyWrench w;
+  w.request.link = "panda_hand";
+  w.request.wrench.force.z = 20.0;
+  w.request.duration = 0.05;
+  EXPECT_TRUE(call_empty("simulator/reset"));
+  ASSERT_TRUE(ros::service::call("simulator/apply_wrench", w));
+  EXPECT_TRUE(w.response.success) << w.response.message;
+  ASSERT_TRUE(step(100).success);
+  const auto pushed = fresh_positions();
+  double moved = 0;
+  for (const auto& kv : before) moved = std::max(moved, std::abs(pushed.at(kv.first) - kv.second));
+  EXPECT_GT(moved, 1e-3);
+  auto wrench_refused = [](se3_sim::ApplyWrench::Request req, const std::string& why) {
+    se3_sim::ApplyWrench c;
+    c.request = req;
+    ASSERT_TRUE(ros::service::call("simulator/apply_wrench", c));
+    EXPECT_FALSE(c.response.success) << why;
+    EXPECT_NE(c.response.message.find(why), std::string::npos) << c.response.message;
+  };
+  se3_sim::ApplyWrench::Request wr = w.request;
+  wr.link = "nope";
+  wrench_refused(wr, "unknown link 'nope'");
+  wr = w.request;
+  wr.reference_frame = "panda_link3";
+  wrench_refused(wr, "only the world frame");
+  wr = w.request;
+  wr.wrench.force.x = 1e300;
+  wrench_refused(wr, "~max_wrench");
+  wr = w.request;
+  wr.wrench.torque.y = std::nan("");
+  wrench_refused(wr, "non-finite");
+  std_srvs::Trigger clear;
+  ASSERT_TRUE(ros::service::call("simulator/clear_wrenches", clear));
+  EXPECT_TRUE(clear.response.success);
+  // Resume is refused only after a divergence; here it is taken.
   EXPECT_TRUE(call_empty("simulator/resume"));
 }
 
@@ -290,6 +463,7 @@ TEST(Simulator, ResetPauseStepResume) {
   ASSERT_TRUE(call_empty("simulator/resume"));
   const auto refused = step(5);
   EXPECT_FALSE(refused.success);
+  EXPECT_NE(refused.message.find("call simulator/pause first"), std::string::npos);
   wait(0.3);
   EXPECT_FALSE(fresh_stats().paused);
   EXPECT_GT(fresh_stats().sim_time, 0.1);
@@ -304,9 +478,11 @@ int main(int argc, char** argv) {
   ros::param::get("~rate", g_rate);
   ros::Subscriber a = nh.subscribe("joint_states", 100, &Listener::on_js, &listener);
   ros::Subscriber b = nh.subscribe("/tf", 100, &Listener::on_tf, &listener);
+  ros::Subscriber b2 = nh.subscribe("/tf_static", 10, &Listener::on_tf_static, &listener);
   ros::Subscriber c = nh.subscribe("chain_state", 100, &Listener::on_cs, &listener);
   ros::Subscriber d = nh.subscribe("sim_stats", 100, &Listener::on_stats, &listener);
   ros::Subscriber e = nh.subscribe("sim_markers", 100, &Listener::on_markers, &listener);
+  g_pub = nh.advertise<se3_sim::JointTorques>("torque_command", 10);
   ros::AsyncSpinner spinner(2);
   spinner.start();
   if (!ros::service::waitForService("simulator/step", ros::Duration(20.0))) {

@@ -15,6 +15,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "se3_sim/lie.h"
@@ -53,6 +54,9 @@ struct JointModel {
     static constexpr int k[] = {2, 5, -1, -1};  // in the order of JointType
     return k[static_cast<int>(type)];
   }
+  /// Whether the joint's coordinate is an angle (a revolute joint; without limits it wraps at
+  /// 2 pi, URDF's continuous joint).
+  bool angular() const { return type == JointType::Revolute; }
   /// S in the body frame, 6 x nv: e_3, e_6, the identity (free base), empty (fixed base).
   Eigen::Matrix<double, 6, Eigen::Dynamic> motion_subspace() const;
   /// X_tree exp(S q), the body's frame in its parent's, for the joint's nq coordinates at q (the
@@ -86,9 +90,21 @@ struct Geometry {
 
 /// A URDF link and where it sits on its (merged) body.
 struct LinkFrame {
+  LinkFrame(std::string name_ = "", int body_ = 0, const SE3& offset_ = SE3(), int parent_ = -1,
+            std::string joint_ = "", bool fixed_ = false)
+      : name(std::move(name_)),
+        body(body_),
+        offset(offset_),
+        parent(parent_),
+        joint(std::move(joint_)),
+        fixed(fixed_) {}
   std::string name;
   int body = 0;  ///< body index
   SE3 offset;    ///< link frame = body frame * offset
+  // The URDF tree (for TF as robot_state_publisher publishes it):
+  int parent = -1;     ///< index in Model::links of the URDF parent link (-1: the root)
+  std::string joint;   ///< URDF joint from the parent link ("" for the root)
+  bool fixed = false;  ///< that joint is fixed in the URDF (a locked moving joint is not)
 };
 
 struct Model {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "se3_sim/constraints.h"
+#include "se3_sim/controllers.h"
 #include "se3_sim/integrate.h"
 
 namespace se3 {
@@ -37,6 +38,8 @@ struct SceneError : std::runtime_error {
 ///   chain: {length: 0.3, masses: [1.0]}      (for robot: chain:N)
 ///   constraints, joint_limits, ground, contacts, constraint_options: see constraints.h and
 ///       src/sim/contact_scene.cpp (read into Scene::constraints)
+///   controllers: {NAME: {type: effort_controllers/..., joints: [...], pid: {...}}, ...}
+///       ros_control-style controllers (controllers.h), every one listed runs at every step
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -68,6 +71,7 @@ struct Scene {
   double chain_length = 0.3;
   std::vector<double> chain_masses = {1.0};
   ConstraintSpec constraints;  ///< bilateral constraints, limits, ground contact (empty: none)
+  std::vector<ControllerSpec> controllers;  ///< run inside the simulator (empty: none)
 };
 
 /// Reads a scene file. Throws SceneError.
@@ -159,12 +163,39 @@ class Simulator {
   double time() const { return time_; }
   std::uint64_t steps() const { return steps_; }
 
-  // ---- commands (kept until changed)
+  // ---- commands (kept until changed, or for command_timeout() of simulated time)
   /// Sets joint i's (1..n) commanded effort, clamped to its URDF effort limit (when that is
-  /// finite and positive). Returns the clamped value.
+  /// finite and positive); the other joints keep theirs. Returns the clamped value.
   double set_joint_effort(int i, double effort);
-  /// Wrench on a free base (base frame, about its origin); ignored for a fixed base.
+  /// Wrench on a free base (base frame, about its origin); ignored for a fixed base. Throws
+  /// std::invalid_argument (nothing changed) for a non-finite value.
   void set_base_wrench(const Vec6& wrench);
+  /// A command (each joint's effort, the base wrench) stops acting after this many simulated
+  /// seconds unless set again: it acts on the next ceil(timeout / dt) steps, so a paused
+  /// simulation keeps it until it has stepped. inf (the default) or <= 0: kept until changed.
+  void set_command_timeout(double seconds);
+  double command_timeout() const { return command_timeout_; }
+
+  // ---- controllers (controllers.h), run at every step on the state the step starts from
+  /// Replaces the controllers (an empty list removes them) and resets them to the current
+  /// state. Throws ControllerError (nothing changed) for a joint the model lacks or one claimed
+  /// twice.
+  void set_controllers(const std::vector<ControllerSpec>& specs);
+  /// nullptr without controllers; set_command() on it changes their targets.
+  ControllerSet* controllers() { return controllers_.get(); }
+
+  // ---- external wrenches on links (as Gazebo's apply_body_wrench)
+  static constexpr int kMaxLinkWrenches = 16;
+  /// Applies wrench = [torque; force] (world axes, torque about the point) at a point fixed on
+  /// URDF link `link` (index into Model::links; point in that link's frame) for `duration`
+  /// simulated seconds (ceil(duration / dt) steps; < 0: until cleared or reset). It enters as the
+  /// generalized force J^T wrench (J the point's Jacobian, joints on the link's path and a free
+  /// base), evaluated at the start of each step. Wrenches add up. Throws std::invalid_argument
+  /// (nothing changed) for a bad link, a non-finite value, or more than kMaxLinkWrenches.
+  void apply_link_wrench(int link, const Vec3& point, const Vec6& wrench, double duration);
+  /// Removes the wrenches on one link (-1: all).
+  void clear_link_wrenches(int link = -1);
+  int link_wrench_count() const { return static_cast<int>(wrenches_.size()); }
 
   // ---- constraints (constraints.h); none unless set
   /// Adds constraints (an empty spec removes them): anchors point_world constraints at the
@@ -174,10 +205,15 @@ class Simulator {
   const ConstraintSystem* constraints() const { return constraints_.get(); }
   /// Largest constraint error at the current state (ConstraintSystem::error), NaN if none.
   double constraint_error();
+  /// Zeroes the commanded efforts and base wrench (controllers and link wrenches stay).
   void clear_command();
-  /// The commanded generalized force (size nv).
+  /// The commanded generalized force (size nv): torque commands and base wrench.
   const VecX& command() const { return command_; }
-  /// Joint efforts acting at the current state (size n): command plus damping and friction.
+  /// The actuation of the last step (size nv): command plus controller efforts, clamped to the
+  /// effort limits (without controllers: the command as it stands). Link wrenches are not in it.
+  const VecX& actuation() const { return controllers_ ? actuation_ : command_; }
+  /// Joint efforts acting at the current state (size n): the command (a controlled joint: its
+  /// actuation of the last step) plus damping and friction.
   void applied_joint_efforts(VecX& out);
 
   // ---- stepping
@@ -221,15 +257,36 @@ class Simulator {
   bool rates_ok() const;
   bool energy_ok();
   void roll_back(const StepInfo& info);
+  /// The generalized force of the next step: expires stale commands, runs the controllers,
+  /// adds the link wrenches.
+  const VecX& step_forces();
+  void add_link_wrenches(VecX& tau);
+  void count_down_link_wrenches();
+  /// The step count from which a command set now no longer acts.
+  std::uint64_t command_expiry() const;
+
+  struct LinkWrench {
+    int link = 0;
+    Vec3 point = Vec3::Zero();
+    Vec6 wrench = Vec6::Zero();
+    std::int64_t steps_left = -1;  ///< -1: until cleared
+  };
 
   std::unique_ptr<Model> model_;
   SimConfig config_;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;
+  std::unique_ptr<ConstraintSystem> constraints_start_;  ///< as set, to restart from on reset
+  std::unique_ptr<ControllerSet> controllers_;
+  std::vector<LinkWrench> wrenches_;  ///< capacity kMaxLinkWrenches, reserved once
   Data diag_;
   KineticEnergyBound energy_bound_;
   State initial_, state_, last_good_, last_checked_;
-  VecX command_;
+  VecX command_, actuation_, forces_;
+  /// Per velocity coordinate: the step count from which its command no longer acts.
+  std::vector<std::uint64_t> command_until_;
+  std::uint64_t next_expiry_ = std::numeric_limits<std::uint64_t>::max();  ///< min of those
+  double command_timeout_ = std::numeric_limits<double>::infinity();
   double time_ = 0, last_checked_time_ = 0;
   std::uint64_t steps_ = 0, substeps_ = 0, rejected_ = 0, evaluations_ = 0;
   std::uint64_t last_checked_steps_ = 0;
@@ -237,6 +294,14 @@ class Simulator {
   std::string failure_;
   double T0_ = 0, U0_ = 0, E_ref_ = 1;
 };
+
+/// Adds to tau (size nv) the generalized force J^T w of a wrench w = [torque; force] (world
+/// axes, torque about the point) acting at `point` (in the frame of Model::links[link]), J the
+/// point's Jacobian: joint j on the link's path (world axis a through o_j) gets a . (N + (p - o_j)
+/// x F) when revolute, a . F when prismatic; a free base the wrench moved to its origin, in its
+/// frame. data holds forward_kinematics at the pose. O(depth), allocation-free.
+void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
+                           const Vec6& wrench, VecX& tau);
 
 /// Builds a simulator for a scene (urdf_xml as in scene_model).
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml = "");

@@ -216,7 +216,7 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
     m.add_body(i - 1, JointType::Revolute, SE3(turns[i % 3], Vec3(length, 0, 0)),
                box_inertia(mass_of(i), length), "link" + std::to_string(i),
                "j" + std::to_string(i));
-    m.links.push_back({m.body_name.back(), i, SE3()});
+    m.links.push_back({m.body_name.back(), i, SE3(), i - 1, m.joint_name.back(), false});
     m.visuals.push_back(g);
     m.visual_body.push_back(i);
   }

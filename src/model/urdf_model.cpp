@@ -115,8 +115,11 @@ struct Builder {
     return 0;
   }
 
-  void add_link_data(const urdf::Link& link, int body, const SE3& O) {
-    m.links.push_back({link.name, body, O});
+  // parent: index in m.links of the URDF parent link (-1 for the root), j the joint from it.
+  void add_link_data(const urdf::Link& link, int body, const SE3& O, int parent,
+                     const urdf::Joint* j) {
+    m.links.push_back({link.name, body, O, parent, j ? j->name : std::string(),
+                       j && j->type == urdf::Joint::FIXED});
     if (link.inertial) add_inertial(link, body, O);
     auto add_geoms = [&](const auto& arr, const auto& single, std::vector<Geometry>& dst,
                          std::vector<int>& dst_body, bool visual) {
@@ -187,8 +190,10 @@ struct Builder {
   }
 
   // Depth-first: a body's subtree is contiguous, and parent[i] < i.
-  void visit(const urdf::Link& link, int body, const SE3& O) {
-    add_link_data(link, body, O);
+  void visit(const urdf::Link& link, int body, const SE3& O, int parent_link = -1,
+             const urdf::Joint* from = nullptr) {
+    const int self = static_cast<int>(m.links.size());
+    add_link_data(link, body, O, parent_link, from);
     for (const auto& j : link.child_joints) {
       const urdf::LinkConstSharedPtr child = urdf.getLink(j->child_link_name);
       if (!child) throw ModelError("joint '" + j->name + "': child link missing");
@@ -198,7 +203,7 @@ struct Builder {
       const double ql = locked_position(j->name, locked);
       switch (j->type) {
         case urdf::Joint::FIXED:
-          visit(*child, body, T);
+          visit(*child, body, T, self, j.get());
           break;
         case urdf::Joint::REVOLUTE:
         case urdf::Joint::CONTINUOUS:
@@ -211,14 +216,14 @@ struct Builder {
           if (locked) {
             const SE3 motion = prismatic ? SE3(Mat3::Identity(), ql * axis)
                                          : SE3(exp_so3(ql * axis), Vec3::Zero());
-            visit(*child, body, T * motion);
+            visit(*child, body, T * motion, self, j.get());
             break;
           }
           const Mat3 Ra = frame_with_z(axis);
           const int i = m.n + 1;
           add_body(body, T * SE3(Ra, Vec3::Zero()),
                    prismatic ? JointType::Prismatic : JointType::Revolute, *j);
-          visit(*child, i, SE3(Ra.transpose(), Vec3::Zero()));
+          visit(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j.get());
           break;
         }
         case urdf::Joint::FLOATING:

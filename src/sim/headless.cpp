@@ -81,6 +81,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   cfg.stepper.friction_eps = scene.friction_eps;
   Simulator sim(std::move(model), x0, cfg);
   if (!scene.constraints.empty()) sim.set_constraints(scene.constraints);
+  if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;
   if (!o.out_csv.empty()) {

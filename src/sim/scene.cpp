@@ -1,5 +1,6 @@
 // Scenes (sim.h): YAML text -> Scene -> Model and initial State.
 #include <sys/stat.h>
+#include <yaml-cpp/yaml.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -73,7 +74,8 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
                                    "real_time_factor",
                                    "publish_rate",
                                    "friction_eps",
-                                   "chain"};
+                                   "chain",
+                                   "controllers"};
   for (const auto& k : constraint_scene_keys()) keys.push_back(k);  // constraints.h
   r.only_keys(root, "the scene", keys);
   Scene s;
@@ -195,6 +197,15 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     } else if (k == "friction_eps") {
       s.friction_eps = r.number(v, k);
       if (!(s.friction_eps > 0)) r.fail(v, "'friction_eps' must be positive");
+    } else if (k == "controllers") {
+      // ros_control's YAML shape (controllers.h), read with yaml-cpp from the same text.
+      try {
+        s.controllers = parse_controllers(YAML::Load(text)["controllers"], {}, file_for_messages);
+      } catch (const YAML::Exception& e) {
+        throw SceneError(file_for_messages + ": controllers: " + e.what());
+      } catch (const ControllerError& e) {
+        throw SceneError(e.what());
+      }
     } else if (std::find(constraint_scene_keys().begin(), constraint_scene_keys().end(), k) !=
                constraint_scene_keys().end()) {
       parse_constraint_key(k, v, file_for_messages, s.constraints);

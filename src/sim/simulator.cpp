@@ -9,6 +9,10 @@
 
 namespace se3 {
 
+namespace {
+constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+}  // namespace
+
 KineticEnergyBound::KineticEnergyBound(const Model& model)
     : floating_(model.floating), body_(model.n + 1), path_(model.n + 1) {
   for (int i = 0; i <= model.n; ++i) {
@@ -61,7 +65,11 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
       diag_(*model_),
       energy_bound_(*model_),
       initial_(initial),
-      command_(VecX::Zero(model_->nv)) {
+      command_(VecX::Zero(model_->nv)),
+      actuation_(VecX::Zero(model_->nv)),
+      forces_(VecX::Zero(model_->nv)),
+      command_until_(model_->nv, kNever) {
+  wrenches_.reserve(kMaxLinkWrenches);
   if (!(config_.dt > 0) || !std::isfinite(config_.dt)) {
     throw std::invalid_argument("dt must be positive and finite");
   }
@@ -106,7 +114,13 @@ void Simulator::reset() {
   last_checked_steps_ = 0;
   steps_to_energy_check_ = config_.guard.energy_check_every;
   failure_.clear();
-  command_.setZero();
+  clear_command();
+  actuation_.setZero();
+  wrenches_.clear();
+  if (controllers_) controllers_->reset(state_);
+  // The constraint solver keeps warm starts between steps: start again from the system as set,
+  // so that the same commands after a reset give the same states.
+  if (constraints_start_) constraints_ = std::make_unique<ConstraintSystem>(*constraints_start_);
   stepper_->restart();
   refresh_reference();
 }
@@ -133,24 +147,142 @@ void Simulator::set_dt(double dt) {
 
 double Simulator::set_joint_effort(int i, double effort) {
   if (i < 1 || i > model_->n) throw std::out_of_range("joint index out of range");
+  if (!std::isfinite(effort)) throw std::invalid_argument("effort is not finite");
   const double lim = model_->effort[i];
   if (std::isfinite(lim) && lim > 0) effort = std::min(lim, std::max(-lim, effort));
-  command_[model_->idx_v(i)] = effort;
+  const int k = model_->idx_v(i);
+  command_[k] = effort;
+  command_until_[k] = command_expiry();
+  next_expiry_ = std::min(next_expiry_, command_until_[k]);
   return effort;
 }
 
 void Simulator::set_base_wrench(const Vec6& wrench) {
-  if (model_->floating) command_.head<6>() = wrench;
+  if (!wrench.allFinite()) throw std::invalid_argument("base wrench is not finite");
+  if (!model_->floating) return;
+  command_.head<6>() = wrench;
+  const std::uint64_t until = command_expiry();
+  for (int k = 0; k < 6; ++k) command_until_[k] = until;
+  next_expiry_ = std::min(next_expiry_, until);
+}
+
+void Simulator::set_command_timeout(double seconds) {
+  command_timeout_ = seconds > 0 ? seconds : std::numeric_limits<double>::infinity();
+}
+
+std::uint64_t Simulator::command_expiry() const {
+  if (!std::isfinite(command_timeout_)) return kNever;
+  const double n = std::ceil(command_timeout_ / config_.dt - 1e-9);
+  if (!(n < 1e18)) return kNever;
+  return steps_ + static_cast<std::uint64_t>(std::max(1.0, n));
+}
+
+void Simulator::set_controllers(const std::vector<ControllerSpec>& specs) {
+  if (specs.empty()) {
+    controllers_.reset();
+    return;
+  }
+  auto c = std::make_unique<ControllerSet>(*model_, specs);
+  c->reset(state_);
+  controllers_ = std::move(c);
+  actuation_ = command_;
+}
+
+void Simulator::apply_link_wrench(int link, const Vec3& point, const Vec6& wrench,
+                                  double duration) {
+  if (link < 0 || link >= static_cast<int>(model_->links.size())) {
+    throw std::invalid_argument("link index out of range");
+  }
+  if (!point.allFinite() || !wrench.allFinite() || std::isnan(duration)) {
+    throw std::invalid_argument("wrench, point or duration is not finite");
+  }
+  if (static_cast<int>(wrenches_.size()) >= kMaxLinkWrenches) {
+    throw std::invalid_argument("already " + std::to_string(kMaxLinkWrenches) +
+                                " link wrenches act; clear some first");
+  }
+  LinkWrench w;
+  w.link = link;
+  w.point = point;
+  w.wrench = wrench;
+  if (duration >= 0) {
+    const double n = std::ceil(duration / config_.dt - 1e-9);
+    w.steps_left = n < 1e18 ? static_cast<std::int64_t>(std::max(0.0, n)) : -1;
+    if (w.steps_left == 0) return;  // acts on no step
+  }
+  wrenches_.push_back(w);
+}
+
+void Simulator::clear_link_wrenches(int link) {
+  if (link < 0) {
+    wrenches_.clear();
+    return;
+  }
+  wrenches_.erase(std::remove_if(wrenches_.begin(), wrenches_.end(),
+                                 [link](const LinkWrench& w) { return w.link == link; }),
+                  wrenches_.end());
+}
+
+void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
+                           const Vec6& wrench, VecX& tau) {
+  const LinkFrame& L = model.links[link];
+  const Vec3 p = (data.oMb[L.body] * L.offset).act(point);
+  const Vec3 N = wrench.head<3>(), F = wrench.tail<3>();
+  for (int i = L.body; i > 0; i = model.parent[i]) {
+    // S^T of the wrench about the body origin, S = [s_w; s_v] the joint's motion subspace in
+    // the body frame turned into the world.
+    const SE3& X = data.oMb[i];
+    const Vec6 S = Vec6::Unit(model.joints[i].axis());  // a one-dof joint
+    const Vec3 w = X.R * S.head<3>(), u = X.R * S.tail<3>();
+    tau[model.idx_v(i)] += w.dot(N + (p - X.p).cross(F)) + u.dot(F);
+  }
+  if (model.floating) {
+    const SE3& B = data.oMb[0];
+    tau.head<3>() += B.R.transpose() * (N + (p - B.p).cross(F));
+    tau.segment<3>(3) += B.R.transpose() * F;
+  }
+}
+
+void Simulator::add_link_wrenches(VecX& tau) {
+  forward_kinematics(*model_, diag_, state_.base, state_.q);
+  for (const LinkWrench& w : wrenches_) {
+    add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
+  }
+}
+
+const VecX& Simulator::step_forces() {
+  if (steps_ >= next_expiry_) {  // one comparison per step unless a command runs out now
+    next_expiry_ = kNever;
+    for (int k = 0; k < model_->nv; ++k) {
+      if (steps_ >= command_until_[k]) {
+        command_[k] = 0;
+        command_until_[k] = kNever;
+      }
+      next_expiry_ = std::min(next_expiry_, command_until_[k]);
+    }
+  }
+  if (!controllers_ && wrenches_.empty()) return command_;
+  const VecX* tau = &command_;
+  if (controllers_) {
+    actuation_ = command_;
+    controllers_->update(state_, config_.dt, actuation_);
+    tau = &actuation_;
+  }
+  if (wrenches_.empty()) return *tau;
+  forces_ = *tau;
+  add_link_wrenches(forces_);
+  return forces_;
 }
 
 void Simulator::set_constraints(const ConstraintSpec& spec) {
   constraints_.reset();
+  constraints_start_.reset();
   if (!spec.empty()) {
     constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
     constraints_->anchor(initial_);
     State x = initial_;
     constraints_->project(x);
     initial_ = x;
+    constraints_start_ = std::make_unique<ConstraintSystem>(*constraints_);
   }
   reset();
 }
@@ -161,14 +293,19 @@ double Simulator::constraint_error() {
 
 void Simulator::clear_command() {
   command_.setZero();
+  std::fill(command_until_.begin(), command_until_.end(), kNever);
+  next_expiry_ = kNever;
 }
 
 void Simulator::applied_joint_efforts(VecX& out) {
   out.resize(model_->n);
   const PassiveForces& passive = stepper_->passive();
+  // The command as it stands (a controlled joint's effort as its controller set it last step),
+  // plus the passive forces.
   for (int i = 1; i <= model_->n; ++i) {
     const int k = model_->idx_v(i);
-    out[i - 1] = passive.at(k, command_[k], state_.v[k]);
+    const double cmd = controllers_ && controllers_->controls(i) ? actuation_[k] : command_[k];
+    out[i - 1] = passive.at(k, cmd, state_.v[k]);
   }
 }
 
@@ -209,9 +346,10 @@ bool Simulator::energy_ok() {
 // Invariant between steps: last_good_ is the state, and time and step count are its.
 bool Simulator::step() {
   if (!failure_.empty()) return false;
-  const StepInfo info =
-      constraints_ ? constrained_step(*constraints_, *stepper_, state_, command_, config_.dt)
-                   : stepper_->step(state_, command_, config_.dt);
+  const VecX& tau = step_forces();
+  const StepInfo info = constraints_
+                            ? constrained_step(*constraints_, *stepper_, state_, tau, config_.dt)
+                            : stepper_->step(state_, tau, config_.dt);
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;
@@ -223,6 +361,7 @@ bool Simulator::step() {
   ++steps_;
   time_ += config_.dt;
   save(state_, last_good_);
+  if (!wrenches_.empty()) count_down_link_wrenches();
   if (energy_step) {
     save(state_, last_checked_);
     last_checked_time_ = time_;
@@ -267,6 +406,16 @@ void Simulator::roll_back(const StepInfo& info) {
   stepper_->restart();
 }
 
+void Simulator::count_down_link_wrenches() {
+  size_t keep = 0;
+  for (size_t k = 0; k < wrenches_.size(); ++k) {
+    LinkWrench& w = wrenches_[k];
+    if (w.steps_left > 0) --w.steps_left;
+    if (w.steps_left != 0) wrenches_[keep++] = w;
+  }
+  wrenches_.resize(keep);  // shrinking: no allocation
+}
+
 int Simulator::step_n(int k) {
   int done = 0;
   while (done < k && step()) ++done;
@@ -308,6 +457,7 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
   if (!scene.constraints.empty()) sim->set_constraints(scene.constraints);
+  if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }
 

@@ -1,0 +1,60 @@
+// Typed ROS parameters for the nodes: values read from XmlRpc as they are (a double stays the
+// double it was; a string is parsed with full precision), so no ~dt or ~tol is rounded on the
+// way. roslaunch passes `type="str"` parameters and args as strings, and an empty string means
+// "not set" (sim.launch always sets its overrides, empty meaning "keep the scene's value").
+// Plus the controllers of ros_control's YAML as loaded onto the parameter server.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "se3_sim/controllers.h"
+
+namespace YAML {
+class Node;
+}
+
+namespace se3_ros {
+
+/// Thrown for a parameter that is set but cannot be used; the message names it.
+struct ParamError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A number: a double or int value, or a string holding a finite number. nullopt for the empty
+/// string; ParamError (naming `name`) for anything else.
+std::optional<double> to_double(const XmlRpc::XmlRpcValue& v, const std::string& name);
+/// A boolean: bool, int 0 / 1, or the strings true/false/True/False/1/0. nullopt for "".
+std::optional<bool> to_bool(const XmlRpc::XmlRpcValue& v, const std::string& name);
+/// A string (a number is refused: a name is expected). nullopt for "".
+std::optional<std::string> to_text(const XmlRpc::XmlRpcValue& v, const std::string& name);
+/// A list of names: an array of strings, or one string of names separated by spaces or commas
+/// (roslaunch's controllers:="a b"). Empty for "".
+std::vector<std::string> to_names(const XmlRpc::XmlRpcValue& v, const std::string& name);
+
+/// The same from the parameter server: nullopt (empty) when the parameter is not set.
+std::optional<double> get_double(const ros::NodeHandle& nh, const std::string& name);
+std::optional<bool> get_bool(const ros::NodeHandle& nh, const std::string& name);
+std::optional<std::string> get_text(const ros::NodeHandle& nh, const std::string& name);
+std::vector<std::string> get_names(const ros::NodeHandle& nh, const std::string& name);
+
+/// An XmlRpc value as a YAML tree (doubles printed with 17 digits, so they read back exactly).
+YAML::Node to_yaml(const XmlRpc::XmlRpcValue& v);
+
+/// Controllers `names` from XmlRpc structs (`configs[k]` is what the parameter server holds
+/// under NAME: {type, joints, ...}), parsed with se3::parse_controller. Throws
+/// se3::ControllerError naming `where` and the controller.
+std::vector<se3::ControllerSpec> controllers_from_xmlrpc(
+    const std::vector<std::string>& names, const std::vector<XmlRpc::XmlRpcValue>& configs,
+    const std::string& where);
+/// The controllers `names`, read from the parameter server under nh's namespace (NAME/type,
+/// NAME/joints, ...: a controller_config YAML loaded with rosparam). A missing one is an error.
+std::vector<se3::ControllerSpec> controllers_from_params(const ros::NodeHandle& nh,
+                                                         const std::vector<std::string>& names);
+
+}  // namespace se3_ros

@@ -1,0 +1,880 @@
+// The simulator node (simulator_node.h; interface in docs/ros.md).
+#include "se3_sim/ros/simulator_node.h"
+
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/JointState.h>
+#include <std_msgs/Float64.h>
+#include <std_msgs/Float64MultiArray.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "se3_sim/ApplyWrench.h"
+#include "se3_sim/ChainState.h"
+#include "se3_sim/ConstraintForces.h"
+#include "se3_sim/JointTorques.h"
+#include "se3_sim/SetState.h"
+#include "se3_sim/SimStats.h"
+#include "se3_sim/Step.h"
+#include "se3_sim/ros/convert.h"
+#include "se3_sim/ros/params.h"
+#include "se3_sim/sim.h"
+
+namespace se3_ros {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+double finite_or_zero(double x) {
+  return std::isfinite(x) ? x : 0.0;
+}
+
+// A step request slice holds the simulator at most this long before the node publishes and
+// serves again.
+constexpr double kSliceSeconds = 0.002;
+
+}  // namespace
+
+class SimulatorNodeImpl {
+ public:
+  SimulatorNodeImpl() : pnh_("~") {}
+
+  bool init();
+  void run();
+
+ private:
+  // ---- setup
+  void configure();
+  void setup_controllers();
+
+  // ---- commands
+  void on_torques(const ros::MessageEvent<se3_sim::JointTorques const>& event);
+  void on_group_command(int c, const std_msgs::Float64MultiArray::ConstPtr& msg);
+  void on_single_command(int c, const std_msgs::Float64::ConstPtr& msg);
+  void controller_command(int c, const double* values, size_t n);
+  /// Under mu_: after an accepted command, lockstep's advance and state.
+  void after_command();
+  void reject(const std::string& what, const std::string& why);
+  void count_drops(const std::string& publisher, std::uint32_t seq);
+
+  // ---- services
+  bool on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool on_step(se3_sim::Step::Request& req, se3_sim::Step::Response& res);
+  bool on_set_state(se3_sim::SetState::Request& req, se3_sim::SetState::Response& res);
+  bool on_apply_wrench(se3_sim::ApplyWrench::Request& req, se3_sim::ApplyWrench::Response& res);
+  bool on_clear_wrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+
+  // ---- stepping (under mu_)
+  bool physics_step();
+  void run_step_slice();
+  void end_step_request(bool ok, const std::string& why);
+
+  // ---- publishing
+  ros::Time stamp() const;
+  /// Under mu_: joint_states, /tf, chain_state (and /clock).
+  void publish_state();
+  void publish_clock();
+  /// Under mu_: sim_stats, markers, constraint forces.
+  void publish_stats_and_markers(Clock::time_point now);
+  void add_constraint_forces(const se3::ConstraintSystem& sys, const std_msgs::Header& header,
+                             se3_sim::ConstraintForces& cf,
+                             visualization_msgs::MarkerArray& markers) const;
+
+  ros::NodeHandle nh_, pnh_, ctl_nh_;
+  ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_, constraint_pub_;
+  ros::Subscriber cmd_sub_;
+  std::vector<ros::Subscriber> ctl_subs_;
+  std::vector<ros::ServiceServer> services_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> tf_static_;
+
+  std::mutex mu_;
+  std::condition_variable step_done_;
+  se3::Scene scene_;
+  std::unique_ptr<se3::Simulator> sim_;
+  const se3::Model* model_ = nullptr;  ///< the simulator's (immutable after init)
+  JointTable joints_;
+  TfTree tree_;
+  std::string world_frame_ = "world";
+  double rtf_ = 1.0, rate_ = 100.0, command_timeout_ = 0.5;
+  double max_wrench_ = 1e4, max_effort_ = 1e4;
+  bool use_sim_time_ = false;
+  bool lockstep_ = false;
+  int lockstep_steps_ = 1;
+  bool paused_ = false;
+  std::string status_;
+
+  // A simulator/step request run by the main loop in slices; the answer goes to the waiting
+  // service call's own result.
+  struct StepResult {
+    bool finished = false, ok = false;
+    std::string message;
+  };
+  struct StepRequest {
+    bool active = false;
+    std::uint64_t remaining = 0, done = 0;
+    StepResult* result = nullptr;
+  } request_;
+
+  std::atomic<std::uint64_t> accepted_{0}, rejected_{0}, dropped_{0};
+  std::map<std::string, std::uint32_t> last_seq_;  ///< per torque_command publisher
+  Clock::time_point anchor_, period_start_;
+  std::uint64_t anchored_ = 0;  ///< steps taken since anchor_
+  std::uint64_t period_steps_ = 0;
+  Clock::duration step_wall_{0};
+  se3::VecX effort_;
+  std::vector<se3::SE3> links_;
+  sensor_msgs::JointState js_;
+  se3_sim::ChainState cs_;
+  std::vector<geometry_msgs::TransformStamped> tfs_;
+  TorqueCommand torque_;
+};
+
+// ------------------------------------------------------------------ setup
+
+void SimulatorNodeImpl::configure() {
+  const std::string scene_path = get_text(pnh_, "scene").value_or("");
+  if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
+  const std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
+  std::string urdf_xml = get_text(nh_, "robot_description").value_or("");
+  const bool had_description = !urdf_xml.empty();
+  if (urdf_xml.empty() && !urdf_file.empty()) urdf_xml = read_file(urdf_file);
+  if (urdf_xml.empty() && scene_path.empty()) {
+    throw std::runtime_error(
+        "no robot: set robot_description, ~urdf_file or ~scene (a scene YAML)");
+  }
+  // Scene overrides: set and not "" (sim.launch always sets them, "" meaning the scene's).
+  if (auto b = get_bool(pnh_, "floating")) scene_.floating = *b;
+  if (auto s = get_text(pnh_, "integrator")) scene_.integrator = *s;
+  if (auto x = get_double(pnh_, "dt")) scene_.dt = *x;
+  if (auto x = get_double(pnh_, "tol")) scene_.tol = *x;
+  if (auto x = get_double(pnh_, "real_time_factor")) scene_.real_time_factor = *x;
+  if (auto x = get_double(pnh_, "publish_rate")) scene_.publish_rate = *x;
+  command_timeout_ = get_double(pnh_, "command_timeout").value_or(0.5);
+  world_frame_ = get_text(pnh_, "world_frame").value_or("world");
+  lockstep_ = get_bool(pnh_, "lockstep").value_or(false);
+  max_wrench_ = get_double(pnh_, "max_wrench").value_or(1e4);
+  max_effort_ = get_double(pnh_, "max_effort").value_or(1e4);
+  use_sim_time_ = get_bool(nh_, "/use_sim_time").value_or(false);
+  if (!(scene_.dt > 0)) throw std::runtime_error("~dt must be > 0");
+  if (!(scene_.tol > 0)) throw std::runtime_error("~tol must be > 0");
+  if (!(scene_.real_time_factor >= 0)) throw std::runtime_error("~real_time_factor must be >= 0");
+  if (!(scene_.publish_rate > 0)) throw std::runtime_error("~publish_rate must be > 0");
+  if (command_timeout_ < 0) throw std::runtime_error("~command_timeout must be >= 0 (0: never)");
+  if (!(max_wrench_ > 0) || !(max_effort_ > 0)) {
+    throw std::runtime_error("~max_wrench and ~max_effort must be > 0");
+  }
+  const double period = get_double(pnh_, "control_period").value_or(scene_.dt);
+  if (!(period > 0)) throw std::runtime_error("~control_period must be > 0");
+  lockstep_steps_ = static_cast<int>(std::max(1.0, std::min(1e6, std::round(period / scene_.dt))));
+
+  sim_ = se3::make_simulator(scene_, urdf_xml);
+  sim_->set_command_timeout(command_timeout_);
+  model_ = &sim_->model();
+  rtf_ = scene_.real_time_factor;
+  rate_ = scene_.publish_rate;
+  const se3::Model& m = *model_;
+  if (!had_description) {
+    // Others (renderer, teleop, robot_state_publisher) read the robot from robot_description.
+    const std::string text = !urdf_xml.empty() ? urdf_xml
+                             : scene_.robot_path.compare(0, 6, "chain:") == 0
+                                 ? se3::model_to_urdf(m)
+                                 : read_file(scene_.robot_path);
+    nh_.setParam("robot_description", text);
+  }
+  joints_ = joint_table(m, scene_.locked_joints);
+  tree_ = tf_tree(m, world_frame_);
+  setup_controllers();
+  ROS_INFO(
+      "simulator: %s, %d joints (%s base), %s, dt %g s, real-time factor %g, publishing at %g "
+      "Hz%s",
+      scene_.name.empty() ? m.name.c_str() : scene_.name.c_str(), m.n,
+      m.floating ? "free" : "fixed", sim_->integrator().c_str(), sim_->dt(), rtf_, rate_,
+      lockstep_ ? (", lockstep: " + std::to_string(lockstep_steps_) + " steps per command").c_str()
+                : "");
+}
+
+// The scene's controllers, plus those named in ~controllers from the parameter server (under
+// ~controller_namespace, default this node's namespace); a name in both: the parameter
+// server's. Each listens on <namespace>/NAME/command.
+void SimulatorNodeImpl::setup_controllers() {
+  const std::string ns = get_text(pnh_, "controller_namespace").value_or("");
+  ctl_nh_ = ns.empty() ? nh_ : ros::NodeHandle(nh_, ns);
+  std::vector<se3::ControllerSpec> specs;
+  const std::vector<std::string> names = get_names(pnh_, "controllers");
+  const std::vector<se3::ControllerSpec> from_params = controllers_from_params(ctl_nh_, names);
+  for (const auto& s : scene_.controllers) {
+    bool replaced = false;
+    for (const auto& p : from_params) replaced = replaced || p.name == s.name;
+    if (!replaced) specs.push_back(s);
+  }
+  for (const auto& p : from_params) specs.push_back(p);
+  sim_->set_controllers(specs);
+}
+
+bool SimulatorNodeImpl::init() {
+  try {
+    configure();
+  } catch (const std::exception& e) {
+    ROS_FATAL("simulator: %s", e.what());
+    return false;
+  }
+  joint_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 10);
+  chain_pub_ = nh_.advertise<se3_sim::ChainState>("chain_state", 10);
+  stats_pub_ = nh_.advertise<se3_sim::SimStats>("sim_stats", 10);
+  marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("sim_markers", 10);
+  constraint_pub_ = nh_.advertise<se3_sim::ConstraintForces>("constraint_forces", 10);
+  if (use_sim_time_) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
+  tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  tf_static_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  const std::vector<geometry_msgs::TransformStamped> fixed =
+      tf_static_transforms(*model_, tree_, ros::Time::now());
+  if (!fixed.empty()) tf_static_->sendTransform(fixed);
+
+  // Queues of 1000: a 10 kHz stream is held for 0.1 s; whatever is lost anyway is counted from
+  // the header sequence numbers (torque_command).
+  cmd_sub_ = nh_.subscribe("torque_command", 1000, &SimulatorNodeImpl::on_torques, this,
+                           ros::TransportHints().tcpNoDelay());
+  if (se3::ControllerSet* set = sim_->controllers()) {
+    for (int c = 0; c < set->size(); ++c) {
+      const se3::ControllerSpec& s = set->spec(c);
+      const std::string topic = s.name + "/command";
+      if (se3::single_joint(s.kind)) {
+        ctl_subs_.push_back(ctl_nh_.subscribe<std_msgs::Float64>(
+            topic, 1000,
+            [this, c](const std_msgs::Float64::ConstPtr& msg) { on_single_command(c, msg); },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      } else {
+        ctl_subs_.push_back(ctl_nh_.subscribe<std_msgs::Float64MultiArray>(
+            topic, 1000,
+            [this, c](const std_msgs::Float64MultiArray::ConstPtr& msg) {
+              on_group_command(c, msg);
+            },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      }
+      ROS_INFO("simulator: controller %s (%s, %zu joints) on %s", s.name.c_str(), s.type.c_str(),
+               s.joints.size(), ctl_subs_.back().getTopic().c_str());
+    }
+  }
+  services_.push_back(nh_.advertiseService("simulator/reset", &SimulatorNodeImpl::on_reset, this));
+  services_.push_back(nh_.advertiseService("simulator/pause", &SimulatorNodeImpl::on_pause, this));
+  services_.push_back(
+      nh_.advertiseService("simulator/resume", &SimulatorNodeImpl::on_resume, this));
+  services_.push_back(nh_.advertiseService("simulator/step", &SimulatorNodeImpl::on_step, this));
+  services_.push_back(
+      nh_.advertiseService("simulator/set_state", &SimulatorNodeImpl::on_set_state, this));
+  services_.push_back(
+      nh_.advertiseService("simulator/apply_wrench", &SimulatorNodeImpl::on_apply_wrench, this));
+  services_.push_back(nh_.advertiseService("simulator/clear_wrenches",
+                                           &SimulatorNodeImpl::on_clear_wrenches, this));
+  return true;
+}
+
+// ------------------------------------------------------------------ main loop
+
+void SimulatorNodeImpl::run() {
+  ros::AsyncSpinner spinner(4);  // a step request waiting for the main loop holds one
+  spinner.start();
+  const Clock::duration pub_period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_));
+  Clock::time_point next_pub = Clock::now();
+  period_start_ = anchor_ = Clock::now();
+  while (ros::ok()) {
+    Clock::time_point now = Clock::now();
+    Clock::time_point wake = next_pub;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (request_.active) {
+        run_step_slice();
+        wake = now;  // come back at once (after publishing, if due)
+      } else if (!paused_ && !lockstep_) {
+        if (rtf_ > 0) {
+          // Steps due by now at the real-time factor; a backlog of more than 0.2 s of wall
+          // time is dropped (the simulation slows instead of racing to catch up).
+          const double due_f = seconds(now - anchor_) * rtf_ / sim_->dt();
+          auto due = static_cast<std::int64_t>(due_f) - static_cast<std::int64_t>(anchored_);
+          const std::int64_t backlog = static_cast<std::int64_t>(0.2 * rtf_ / sim_->dt()) + 1;
+          if (due > backlog) {
+            anchor_ = now;
+            anchored_ = 0;
+            due = 1;
+          }
+          for (std::int64_t k = 0; k < due && !paused_; ++k) {
+            if (physics_step()) publish_clock();
+          }
+          const double next_s = (anchored_ + 1) * sim_->dt() / rtf_;
+          wake = std::min(wake, anchor_ + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(next_s)));
+        } else {
+          // As fast as possible, in chunks, until the next publication is due.
+          for (int k = 0; k < 64 && !paused_; ++k) physics_step();
+          publish_clock();
+          wake = now;
+        }
+      }
+    }
+    now = Clock::now();
+    if (now >= next_pub) {
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (!lockstep_) publish_state();
+        publish_stats_and_markers(now);
+      }
+      next_pub += pub_period;
+      if (next_pub <= now) next_pub = now + pub_period;  // fell behind: skip, keep the rate
+    }
+    if (wake > now) std::this_thread::sleep_until(std::min(wake, next_pub));
+  }
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (request_.active) end_step_request(false, "the simulator is shutting down");
+  }
+  spinner.stop();
+}
+
+// Under mu_. One physics step with timing; the guard pauses the simulator.
+bool SimulatorNodeImpl::physics_step() {
+  const Clock::time_point t0 = Clock::now();
+  const bool ok = sim_->step();
+  step_wall_ += Clock::now() - t0;
+  ++period_steps_;
+  if (ok) {
+    ++anchored_;
+    return true;
+  }
+  paused_ = true;
+  status_ = sim_->failure();
+  ROS_ERROR("simulator paused by the divergence guard: %s", status_.c_str());
+  return false;
+}
+
+// Under mu_. Up to kSliceSeconds of the pending step request.
+void SimulatorNodeImpl::run_step_slice() {
+  const Clock::time_point t0 = Clock::now();
+  while (request_.remaining > 0) {
+    if (!physics_step()) {
+      end_step_request(false,
+                       "stopped after " + std::to_string(request_.done) + " steps: " + status_);
+      return;
+    }
+    --request_.remaining;
+    ++request_.done;
+    if ((request_.done & 63) == 0 && seconds(Clock::now() - t0) > kSliceSeconds) break;
+  }
+  publish_clock();
+  if (request_.remaining == 0) end_step_request(true, "stepped " + std::to_string(request_.done));
+}
+
+// Under mu_.
+void SimulatorNodeImpl::end_step_request(bool ok, const std::string& why) {
+  request_.active = false;
+  if (request_.result) {
+    request_.result->finished = true;
+    request_.result->ok = ok;
+    request_.result->message = why;
+    request_.result = nullptr;
+  }
+  if (lockstep_) publish_state();
+  step_done_.notify_all();
+}
+
+// ------------------------------------------------------------------ commands
+
+void SimulatorNodeImpl::reject(const std::string& what, const std::string& why) {
+  const std::uint64_t n = ++rejected_;
+  ROS_WARN_THROTTLE(1.0, "simulator: %s rejected (%s); %llu rejected so far", what.c_str(),
+                    why.c_str(), static_cast<unsigned long long>(n));
+}
+
+// Gaps in a publisher's header.seq (roscpp and rospy number every message they publish) are
+// messages lost on the way: a full subscriber queue here or a full queue at the publisher.
+void SimulatorNodeImpl::count_drops(const std::string& publisher, std::uint32_t seq) {
+  auto it = last_seq_.find(publisher);
+  if (it == last_seq_.end()) {
+    if (last_seq_.size() >= 1000) last_seq_.clear();  // bounded: forget old publishers
+    last_seq_.emplace(publisher, seq);
+    return;
+  }
+  if (seq > it->second) dropped_ += seq - it->second - 1;
+  it->second = seq;  // lower: the publisher restarted
+}
+
+void SimulatorNodeImpl::on_torques(const ros::MessageEvent<se3_sim::JointTorques const>& event) {
+  const se3_sim::JointTorques& msg = *event.getConstMessage();
+  count_drops(event.getPublisherName(), msg.header.seq);
+  // Checked against the model, which does not change, before taking the simulator.
+  const std::string why =
+      check_torque_command(*model_, joints_, msg, max_effort_, max_wrench_, torque_);
+  if (!why.empty()) {
+    reject("torque command", why);
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  for (const auto& ie : torque_.efforts) {
+    if (ie.first > 0) sim_->set_joint_effort(ie.first, ie.second);
+  }
+  if (torque_.has_base_wrench) {
+    if (!model_->floating) {
+      ROS_WARN_THROTTLE(5.0, "simulator: base wrench ignored (the base is fixed)");
+    }
+    sim_->set_base_wrench(torque_.base_wrench);
+  }
+  ++accepted_;
+  after_command();
+}
+
+void SimulatorNodeImpl::on_group_command(int c, const std_msgs::Float64MultiArray::ConstPtr& msg) {
+  controller_command(c, msg->data.data(), msg->data.size());
+}
+
+void SimulatorNodeImpl::on_single_command(int c, const std_msgs::Float64::ConstPtr& msg) {
+  controller_command(c, &msg->data, 1);
+}
+
+void SimulatorNodeImpl::controller_command(int c, const double* values, size_t n) {
+  std::unique_lock<std::mutex> lock(mu_);
+  const std::string why = sim_->controllers()->set_command(c, values, n);
+  if (!why.empty()) {
+    lock.unlock();
+    reject("controller command", why);
+    return;
+  }
+  ++accepted_;
+  after_command();
+}
+
+// Under mu_. Lockstep: one control period, then one state, for every accepted command (a paused
+// or diverged simulation does not advance, and still answers with its state).
+void SimulatorNodeImpl::after_command() {
+  if (!lockstep_) return;
+  if (!paused_) {
+    for (int k = 0; k < lockstep_steps_; ++k) {
+      if (!physics_step()) break;
+    }
+  }
+  publish_state();
+}
+
+// ------------------------------------------------------------------ services
+
+bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (request_.active) end_step_request(false, "interrupted by simulator/reset");
+  sim_->reset();
+  status_.clear();
+  anchor_ = Clock::now();
+  anchored_ = 0;
+  publish_clock();
+  res.success = true;
+  res.message = "reset to the initial state (time 0)";
+  ROS_INFO("simulator: reset to the initial state");
+  return true;
+}
+
+bool SimulatorNodeImpl::on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (request_.active) end_step_request(false, "interrupted by simulator/pause");
+  res.success = true;
+  res.message = paused_ ? "already paused" : "paused";
+  paused_ = true;
+  return true;
+}
+
+bool SimulatorNodeImpl::on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (!sim_->failure().empty()) {
+    res.success = false;
+    res.message = "cannot resume after divergence (" + sim_->failure() + "); call simulator/reset";
+    return true;
+  }
+  if (request_.active) end_step_request(false, "interrupted by simulator/resume");
+  res.success = true;
+  res.message = lockstep_ ? "resumed (lockstep: commands advance the simulation)" : "resumed";
+  paused_ = false;
+  anchor_ = Clock::now();
+  anchored_ = 0;
+  return true;
+}
+
+bool SimulatorNodeImpl::on_step(se3_sim::Step::Request& req, se3_sim::Step::Response& res) {
+  std::unique_lock<std::mutex> lock(mu_);
+  if (!paused_ && !lockstep_) {
+    res.success = false;
+    res.message = "the simulator is running; call simulator/pause first";
+  } else if (!sim_->failure().empty()) {
+    res.success = false;
+    res.message = "diverged: " + sim_->failure() + "; call simulator/reset";
+  } else if (request_.active) {
+    res.success = false;
+    res.message = "a step request is running (" + std::to_string(request_.remaining) +
+                  " steps left); wait, or call simulator/pause to end it";
+  } else {
+    StepResult result;
+    request_ = StepRequest();
+    request_.active = true;
+    request_.remaining = req.steps;
+    request_.result = &result;
+    if (req.steps == 0) end_step_request(true, "stepped 0");  // lockstep: publishes the state
+    // The main loop runs it in slices; wait for the end (or an interruption).
+    step_done_.wait(lock, [&result] { return result.finished; });
+    res.success = result.ok;
+    res.message = result.message;
+  }
+  res.sim_time = sim_->time();
+  return true;
+}
+
+bool SimulatorNodeImpl::on_set_state(se3_sim::SetState::Request& req,
+                                     se3_sim::SetState::Response& res) {
+  res.success = false;
+  const se3::Model& m = *model_;
+  if (req.name.size() != req.position.size()) {
+    res.message = "name and position lengths differ";
+    return true;
+  }
+  if (!req.velocity.empty() && req.velocity.size() != req.name.size()) {
+    res.message = "velocity needs one value per name (or none)";
+    return true;
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  se3::State x = sim_->state();
+  std::vector<bool> seen(m.n + 1, false);
+  for (size_t k = 0; k < req.name.size(); ++k) {
+    const int i = joints_.index(m, req.name[k]);
+    if (i < 0) {
+      res.message = "unknown joint '" + req.name[k] + "'";
+      return true;
+    }
+    if (i == 0) {
+      res.message = "joint '" + req.name[k] + "' is locked by the scene";
+      return true;
+    }
+    if (seen[i]) {
+      res.message = "joint '" + req.name[k] + "' is named twice";
+      return true;
+    }
+    seen[i] = true;
+    const double q = req.position[k], v = req.velocity.empty() ? 0.0 : req.velocity[k];
+    if (!std::isfinite(q) || !std::isfinite(v)) {
+      res.message = "non-finite value for '" + req.name[k] + "'";
+      return true;
+    }
+    if (q < m.lower[i] || q > m.upper[i]) {
+      res.message = "position " + std::to_string(q) + " of '" + req.name[k] +
+                    "' is outside its limits [" + std::to_string(m.lower[i]) + ", " +
+                    std::to_string(m.upper[i]) + "]";
+      return true;
+    }
+    x.q[i - 1] = q;
+    x.v[m.idx_v(i)] = v;
+  }
+  if (req.set_base_pose) {
+    const std::string why = from_pose(req.base_pose, x.base);
+    if (!why.empty()) {
+      res.message = "base_pose: " + why;
+      return true;
+    }
+  }
+  if (req.set_base_twist) {
+    if (!m.floating) {
+      res.message = "the base is fixed: it has no twist to set";
+      return true;
+    }
+    const se3::Vec6 t = from_twist(req.base_twist);
+    if (!t.allFinite()) {
+      res.message = "base_twist has a non-finite number";
+      return true;
+    }
+    x.v.head<6>() = t;
+  }
+  try {
+    sim_->set_state(x);
+  } catch (const std::exception& e) {
+    res.message = e.what();
+    return true;
+  }
+  res.success = true;
+  res.message = "state set";
+  return true;
+}
+
+bool SimulatorNodeImpl::on_apply_wrench(se3_sim::ApplyWrench::Request& req,
+                                        se3_sim::ApplyWrench::Response& res) {
+  res.success = false;
+  const int link = model_->link_index(req.link);
+  if (link < 0) {
+    res.message = "unknown link '" + req.link + "'";
+    return true;
+  }
+  if (!req.reference_frame.empty() && req.reference_frame != world_frame_) {
+    res.message = "reference_frame '" + req.reference_frame + "': only the world frame ('" +
+                  world_frame_ + "' or '') is taken";
+    return true;
+  }
+  const se3::Vec6 w = from_wrench(req.wrench);
+  const se3::Vec3 p(req.reference_point.x, req.reference_point.y, req.reference_point.z);
+  if (!w.allFinite() || !p.allFinite() || std::isnan(req.duration)) {
+    res.message = "non-finite wrench, point or duration";
+    return true;
+  }
+  if (w.head<3>().norm() > max_wrench_ || w.tail<3>().norm() > max_wrench_) {
+    res.message = "torque or force above ~max_wrench " + std::to_string(max_wrench_);
+    return true;
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  try {
+    sim_->apply_link_wrench(link, p, w, req.duration);
+  } catch (const std::exception& e) {
+    res.message = e.what();
+    return true;
+  }
+  res.success = true;
+  res.message = req.duration < 0 ? "applied until cleared"
+                                 : "applied for " + std::to_string(req.duration) + " s";
+  return true;
+}
+
+bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
+                                          std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mu_);
+  const int n = sim_->link_wrench_count();
+  sim_->clear_link_wrenches();
+  res.success = true;
+  res.message = "cleared " + std::to_string(n) + " wrench" + (n == 1 ? "" : "es");
+  return true;
+}
+
+// ------------------------------------------------------------------ publishing
+
+ros::Time SimulatorNodeImpl::stamp() const {
+  return use_sim_time_ ? ros::Time(sim_->time()) : ros::Time::now();
+}
+
+void SimulatorNodeImpl::publish_clock() {
+  if (!use_sim_time_) return;
+  rosgraph_msgs::Clock c;
+  c.clock = ros::Time(sim_->time());
+  clock_pub_.publish(c);
+}
+
+void SimulatorNodeImpl::publish_state() {
+  const se3::Model& m = *model_;
+  const se3::State& x = sim_->state();
+  const ros::Time t = stamp();
+  sim_->applied_joint_efforts(effort_);
+  fill_joint_state(m, joints_, x, effort_, js_);
+  js_.header.stamp = t;
+  sim_->link_poses(links_);
+  tf_transforms(m, tree_, links_, world_frame_, t, tfs_);
+  fill_chain_state(m, js_, x, sim_->kinetic_energy(), sim_->potential_energy(), cs_);
+  cs_.header.stamp = t;
+  cs_.header.frame_id = world_frame_;
+  if (lockstep_) publish_clock();
+  joint_pub_.publish(js_);
+  tf_->sendTransform(tfs_);
+  chain_pub_.publish(cs_);
+}
+
+void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
+  const se3::Model& m = *model_;
+  const se3::State& x = sim_->state();
+  const ros::Time t = stamp();
+  se3_sim::SimStats st;
+  const double wall = seconds(now - period_start_);
+  st.header.stamp = t;
+  st.integrator = sim_->integrator();
+  st.dt = sim_->dt();
+  st.sim_time = sim_->time();
+  st.step_time_mean = period_steps_ ? seconds(step_wall_) / period_steps_ : 0.0;
+  st.real_time_factor = wall > 0 ? period_steps_ * sim_->dt() / wall : 0.0;
+  const double T = sim_->kinetic_energy(), U = sim_->potential_energy();
+  const double T0 = sim_->initial_kinetic_energy();
+  st.energy_drift_rel = finite_or_zero(std::abs(T + U - T0) / std::max(T0, 1e-12));
+  st.steps = sim_->steps();
+  st.accepted_commands = accepted_;
+  st.rejected_commands = rejected_;
+  st.dropped_commands = dropped_;
+  st.paused = paused_;
+  st.status = status_;
+  period_steps_ = 0;
+  step_wall_ = Clock::duration::zero();
+  period_start_ = now;
+
+  // Markers: centre of mass, the scene's base box, an arrow along each joint axis with an
+  // effort, and the constraint forces.
+  visualization_msgs::MarkerArray markers;
+  const se3::Vec3 c = sim_->center_of_mass();
+  visualization_msgs::Marker com;
+  com.header.stamp = t;
+  com.header.frame_id = world_frame_;
+  com.ns = "com";
+  com.type = visualization_msgs::Marker::SPHERE;
+  com.action = visualization_msgs::Marker::ADD;
+  com.pose.position.x = c.x();
+  com.pose.position.y = c.y();
+  com.pose.position.z = c.z();
+  com.pose.orientation.w = 1;
+  com.scale.x = com.scale.y = com.scale.z = 0.05;
+  com.color.r = 1.0;
+  com.color.g = 0.8;
+  com.color.a = 1.0;
+  markers.markers.push_back(com);
+  if (scene_.has_base_visual) {  // the scene's box on the base link (e.g. a satellite bus)
+    visualization_msgs::Marker bus;
+    bus.header = com.header;
+    bus.ns = "base_visual";
+    bus.type = visualization_msgs::Marker::CUBE;
+    bus.action = visualization_msgs::Marker::ADD;
+    bus.pose = to_pose(se3::SE3(x.base.R, x.base.act(scene_.base_visual_origin)));
+    bus.scale.x = scene_.base_visual_box.x();
+    bus.scale.y = scene_.base_visual_box.y();
+    bus.scale.z = scene_.base_visual_box.z();
+    bus.color.r = scene_.base_visual_color.x();
+    bus.color.g = scene_.base_visual_color.y();
+    bus.color.b = scene_.base_visual_color.z();
+    bus.color.a = 1.0;
+    markers.markers.push_back(bus);
+  }
+  const std::vector<se3::SE3>& oMb = sim_->body_poses();  // from center_of_mass() above
+  const se3::VecX& act = sim_->actuation();
+  for (int i = 1; i <= m.n; ++i) {
+    visualization_msgs::Marker a;
+    a.header = com.header;
+    a.ns = "torque";
+    a.id = i;
+    a.type = visualization_msgs::Marker::ARROW;
+    const double e = act[m.idx_v(i)];
+    if (e == 0) {
+      a.action = visualization_msgs::Marker::DELETE;
+      markers.markers.push_back(a);
+      continue;
+    }
+    a.action = visualization_msgs::Marker::ADD;
+    const double lim = std::isfinite(m.effort[i]) && m.effort[i] > 0 ? m.effort[i] : 10.0;
+    const se3::Vec3 o = oMb[i].p, axis = oMb[i].R.col(2) * (e > 0 ? 1.0 : -1.0);
+    const se3::Vec3 tip = o + axis * (0.05 + 0.25 * std::min(1.0, std::abs(e) / lim));
+    geometry_msgs::Point p0, p1;
+    p0.x = o.x();
+    p0.y = o.y();
+    p0.z = o.z();
+    p1.x = tip.x();
+    p1.y = tip.y();
+    p1.z = tip.z();
+    a.points = {p0, p1};
+    a.pose.orientation.w = 1;
+    a.scale.x = 0.01;
+    a.scale.y = 0.02;
+    a.scale.z = 0.03;
+    a.color.r = e > 0 ? 1.0 : 0.2;
+    a.color.b = e > 0 ? 0.2 : 1.0;
+    a.color.a = 1.0;
+    markers.markers.push_back(a);
+  }
+  if (const se3::ConstraintSystem* sys = sim_->constraints()) {
+    se3_sim::ConstraintForces cf;
+    add_constraint_forces(*sys, com.header, cf, markers);
+    constraint_pub_.publish(cf);
+  }
+  stats_pub_.publish(st);
+  marker_pub_.publish(markers);
+}
+
+// Constraint and contact forces as a message and as arrows on sim_markers (namespace
+// "constraint"): one arrow per constraint row group, from the application point along the
+// force, 0.3 m for a force equal to the robot's weight (at least 2 cm, at most 0.6 m).
+void SimulatorNodeImpl::add_constraint_forces(const se3::ConstraintSystem& sys,
+                                              const std_msgs::Header& header,
+                                              se3_sim::ConstraintForces& cf,
+                                              visualization_msgs::MarkerArray& markers) const {
+  const se3::Model& m = *model_;
+  cf.header = header;
+  const double weight = std::max(m.total_mass() * 9.81, 1e-6);
+  const std::vector<se3::ConstraintForce>& forces = sys.forces();
+  for (size_t k = 0; k < forces.size(); ++k) {
+    const se3::ConstraintForce& f = forces[k];
+    const bool ok = f.point.allFinite() && f.force.allFinite() && f.torque.allFinite();
+    geometry_msgs::Point p;
+    geometry_msgs::Vector3 F, T;
+    if (ok) {
+      p.x = f.point.x(), p.y = f.point.y(), p.z = f.point.z();
+      F.x = f.force.x(), F.y = f.force.y(), F.z = f.force.z();
+      T.x = f.torque.x(), T.y = f.torque.y(), T.z = f.torque.z();
+    }
+    cf.name.push_back(f.name);
+    cf.kind.push_back(static_cast<uint8_t>(f.kind));
+    cf.link.push_back(f.body >= 0 && f.body <= m.n ? m.body_name[f.body] : std::string());
+    cf.point.push_back(p);
+    cf.force.push_back(F);
+    cf.torque.push_back(T);
+    cf.joint_force.push_back(finite_or_zero(f.joint_force));
+    cf.gap.push_back(finite_or_zero(f.gap));
+    cf.active.push_back(ok && f.active);
+
+    visualization_msgs::Marker a;
+    a.header = header;
+    a.ns = "constraint";
+    a.id = static_cast<int>(k);
+    a.type = visualization_msgs::Marker::ARROW;
+    const double mag = ok ? f.force.norm() : 0.0;
+    if (!(ok && f.active) || mag <= 0) {
+      a.action = visualization_msgs::Marker::DELETE;
+      markers.markers.push_back(a);
+      continue;
+    }
+    a.action = visualization_msgs::Marker::ADD;
+    const double len = std::min(0.6, std::max(0.02, 0.3 * mag / weight));
+    const se3::Vec3 tip = f.point + f.force / mag * len;
+    geometry_msgs::Point p1;
+    p1.x = tip.x(), p1.y = tip.y(), p1.z = tip.z();
+    a.points = {p, p1};
+    a.pose.orientation.w = 1;
+    a.scale.x = 0.008;
+    a.scale.y = 0.016;
+    a.scale.z = 0.024;
+    a.color.g = 0.9;
+    a.color.b = f.kind == se3::ConstraintForce::Contact ? 0.2 : 0.9;
+    a.color.a = 1.0;
+    markers.markers.push_back(a);
+  }
+}
+
+// ------------------------------------------------------------------ public face
+
+SimulatorNode::SimulatorNode() : impl_(std::make_unique<SimulatorNodeImpl>()) {}
+SimulatorNode::~SimulatorNode() = default;
+bool SimulatorNode::init() {
+  return impl_->init();
+}
+void SimulatorNode::run() {
+  impl_->run();
+}
+
+}  // namespace se3_ros
