@@ -264,7 +264,8 @@ class RkmkStepper final : public Stepper {
 
   // The base pose at a stage, x.base exp(xi). Without a constraint hook only ABA sees it, and
   // ABA depends on the base pose only through its rotation (the direction of gravity in the base
-  // frame, dynamics.h): then the position is left as it is, and with zero gravity the pose too.
+  // frame: dynamics.h's contract, tested by gtest_dynamics): then the position is left as it is,
+  // and with zero gravity the pose too.
   SE3 stage_pose(const SE3& base, const Vec6& xi) const {
     if (acceleration_hook()) return base * exp_se3(xi);
     if (model_.gravity.isZero(0.0)) return base;
