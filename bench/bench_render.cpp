@@ -47,7 +47,7 @@ Scene load(const std::string& file) {
   }
   for (int i = 0; i < s.model.n; ++i) {  // within the limits (fingers closed)
     const int b = i + 1;
-    if (s.model.joints[b].type == JointType::Prismatic) q(i) = 0.0;
+    if (!s.model.joints[b].angular()) q(i) = 0.0;
     q(i) = std::min(std::max(q(i), s.model.lower[b]), s.model.upper[b]);
   }
   forward_kinematics(s.model, data, SE3(), q);

@@ -526,6 +526,31 @@ TEST(Dynamics, AbaReadsTheBasePoseOnlyThroughGravity) {
   }
 }
 
+// Data holds what its fields say: rnea and aba both leave the body twists V (those of
+// forward_kinematics with v) and the accelerations A with gravity folded in; for the same motion
+// (a = ABA(tau)) the two recursions agree on A, and D^-1 and crba leave their matrices.
+TEST(Dynamics, DataFieldsAreFilledAsDocumented) {
+  for (bool floating : {false, true}) {
+    const Model m = make_chain(9, floating, {1.5, 0.7});
+    Data fk(m), r(m), ab(m);
+    std::mt19937_64 rng(57);
+    const RandomState s = se3_test::random_state(m, rng);
+    forward_kinematics(m, fk, s.base, s.q, s.v);
+    const VecX a = aba(m, ab, s.base, s.q, s.v, s.u);
+    rnea(m, r, s.base, s.q, s.v, a);
+    for (int i = 0; i <= m.n; ++i) {
+      EXPECT_LE((r.V[i] - fk.V[i]).cwiseAbs().maxCoeff(), 1e-14) << i;
+      EXPECT_LE((ab.V[i] - fk.V[i]).cwiseAbs().maxCoeff(), 1e-14) << i;
+      EXPECT_LE((r.A[i] - ab.A[i]).cwiseAbs().maxCoeff(), 1e-11 * (1 + ab.A[i].norm())) << i;
+    }
+    EXPECT_GT(fk.V[m.n].norm(), 0.1);
+    EXPECT_GT(ab.A[m.n].norm(), 0.1);
+    EXPECT_EQ(r.M.size(), 0);  // no mass matrix until crba is called
+    crba(m, r, s.base, s.q);
+    EXPECT_EQ(r.M.rows(), m.nv);
+  }
+}
+
 // crba's paired row kernel against its scalar reference: identical bits for every segment start
 // and length (odd and even, so the paired loop and its tail both run) and both output strides.
 TEST(Dynamics, PairedRowKernelEqualsItsScalarReference) {

@@ -88,7 +88,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
       p = pt + qi * Rt.col(2);
     }
     Xi[i] = motion_inv(R, p);
-    const L qd = v[off + i - 1];
+    const L qd = v[m.idx_v(i)];
     V[i] = Xi[i] * V[m.parent[i]];
     V[i][ax[i]] += qd;
     Vec6L Sq = Vec6L::Zero();
@@ -100,7 +100,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
   for (int i = n; i >= 1; --i) {
     U[i] = IA[i].col(ax[i]);
     D[i] = U[i][ax[i]];
-    u[i] = static_cast<L>(tau[off + i - 1]) - pA[i][ax[i]];
+    u[i] = static_cast<L>(tau[m.idx_v(i)]) - pA[i][ax[i]];
     const Mat6L Ia = IA[i] - U[i] * U[i].transpose() / D[i];
     const Vec6L pa = pA[i] + Ia * c[i] + U[i] * (u[i] / D[i]);
     const int p = m.parent[i];
@@ -119,7 +119,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
     A[i] = Xi[i] * A[m.parent[i]] + c[i];
     const L qdd = (u[i] - U[i].dot(A[i])) / D[i];
     A[i][ax[i]] += qdd;
-    out[off + i - 1] = qdd;
+    out[m.idx_v(i)] = qdd;
   }
   return out;
 }
