@@ -14,7 +14,8 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   python3-rosservice python3-roslaunch python3-std-srvs)
 if [[ "${1:-}" == "--test" ]]; then
   pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
-    ros-robot-state-publisher libmujoco-dev valgrind)
+    ros-robot-state-publisher libmujoco-dev valgrind
+    g++-aarch64-linux-gnu)
   # the sanitizer build and the fuzz targets (scripts/sanitize.sh)
   pkgs+=(clang libclang-rt-14-dev llvm libtinyxml-dev)
 fi

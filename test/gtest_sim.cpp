@@ -93,14 +93,14 @@ TEST(Scene, FixedPandaIsTheSevenDofArmOnAFixedBaseUnderGravity) {
   const Scene s = load_scene(kScenes + "fixed_panda.yaml");
   EXPECT_FALSE(s.floating);
   EXPECT_EQ(s.gravity, Vec3(0, 0, -9.81));
-  EXPECT_EQ(s.integrator, "symplectic_euler");
+  EXPECT_EQ(s.integrator, "semi_implicit_euler");
   EXPECT_EQ(s.dt, 1e-3);
   auto sim = make_simulator(s);
   const Model& m = sim->model();
   EXPECT_EQ(m.n, 7);
   EXPECT_EQ(m.nv, 7);
   EXPECT_EQ(m.joint_index("panda_finger_joint1"), -1);
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
   // Released from rest, it falls: kinetic energy grows from zero, potential energy drops.
   EXPECT_EQ(sim->kinetic_energy(), 0.0);
   ASSERT_EQ(sim->step_n(100), 100) << sim->failure();
@@ -393,7 +393,7 @@ TEST(Headless, RandomStatesAreReproducibleAndIntegratorsRankByAccuracy) {
   o.duration = 1.0;
   o.dt = 1e-3;
   double drift[3];
-  const char* names[3] = {"euler", "symplectic_euler", "rkmk4"};
+  const char* names[3] = {"euler", "semi_implicit_euler", "rkmk4"};
   for (int k = 0; k < 3; ++k) {
     o.integrator = names[k];
     const SimulateResult a = simulate_headless(o);
@@ -490,7 +490,7 @@ TEST(Guard, KineticEnergyBoundIsNeverBelowTheEnergy) {
       se3_test::RandomState s = se3_test::random_state(m, rng);
       if (k % 4 == 1) {
         for (int i = 1; i <= m.n; ++i) {
-          if (m.joint_type[i] == JointType::Prismatic) s.q[i - 1] = se3_test::uniform(rng, -2, 2);
+          if (m.joints[i].type == JointType::Prismatic) s.q[i - 1] = se3_test::uniform(rng, -2, 2);
         }
       }
       check(s, k % 4 == 2 ? VecX(1e3 * s.v) : s.v);
@@ -545,12 +545,13 @@ TEST(Simulator, ResetStepAndCommands) {
   sim->link_poses(poses);
   ASSERT_EQ(poses.size(), m.links.size());
   EXPECT_TRUE(poses[0].isApprox(s.base_pose * m.links[0].offset, 1e-12));
-  // A different integrator keeps the state.
+  // A different integrator keeps the state; the former name symplectic_euler is an alias of
+  // semi_implicit_euler.
   sim->set_integrator("symplectic_euler");
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
   EXPECT_EQ(sim->state().v, moving.v);
   EXPECT_THROW(sim->set_integrator("nope"), std::invalid_argument);
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
 }
 
 int main(int argc, char** argv) {

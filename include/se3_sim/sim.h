@@ -127,15 +127,18 @@ class KineticEnergyBound {
  private:
   struct Body {
     int parent = -1;
-    int iv = 0;  ///< index of the joint rate in v
-    bool prismatic = false;
+    int iv = 0;         ///< index of the joint rate in v
+    int iq = 0;         ///< index of the joint position in q
+    double turn = 0;    ///< |angular part of S|: 1 for a revolute joint, 0 for a prismatic one
+    double slide = 0;   ///< |linear part of S|: 0 for a revolute joint, 1 for a prismatic one
     double offset = 0;  ///< |joint origin| in the parent's frame
     double com = 0;     ///< |centre of mass| in the body frame
     double mass = 0;
     double trace = 0;  ///< trace of the rotational inertia about the body origin
   };
   /// Per body, along its path from the base: length L from the base origin to the body origin,
-  /// sums W of |qdot| and P of |qdot| L over the revolute joints, S of |qdot| over the prismatic.
+  /// sums W of |qdot| and P of |qdot| L over the revolute joints, S of |qdot| over the prismatic
+  /// (each joint counted by its turn and slide).
   struct Path {
     double L = 0, W = 0, P = 0, S = 0;
   };

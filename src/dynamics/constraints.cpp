@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "joint.h"
+
 namespace se3 {
 
 std::string constraint_type_name(ConstraintType t) {
@@ -166,6 +168,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   const int nc = static_cast<int>(contacts_.size());
   max_rows_ = nb_ + (spec.joint_limits ? 2 * model.n : 0) + 3 * nc;
 
+  data_.reserve_minv(model);  // minv runs inside time steps
   Sw_.assign(nv, Vec6::Zero());
   Vb_.assign(model.n + 1, Vec6::Zero());
   Ab_.assign(model.n + 1, Vec6::Zero());
@@ -240,19 +243,20 @@ void ConstraintSystem::kinematics(const SE3& base, const VecX& q, const VecX* v)
     for (int k = 0; k < 6; ++k) Sw_[k] = act_motion(data_.oMb[0], Vec6::Unit(k));
   }
   for (int i = 1; i <= m.n; ++i) {
-    const int ax = m.joint_type[i] == JointType::Revolute ? 2 : 5;
-    Sw_[m.idx_v(i)] = act_motion(data_.oMb[i], Vec6::Unit(ax));
+    detail::with_joint(m.joints[i],
+                       [&](auto J) { J.world_axis(data_.oMb[i], Sw_[m.idx_v(i)].data()); });
   }
   if (!v) return;
-  Vb_[0] = m.floating ? Vec6(v->head<6>()) : Vec6::Zero();
+  body_twists(m, data_, *v);
+  Vb_.swap(data_.V);  // kept here: the next aba call on data_ overwrites data_.V
+  const std::vector<Vec6>& Vb = Vb_;
   Ab_[0].setZero();
   for (int i = 1; i <= m.n; ++i) {
-    const int ax = m.joint_type[i] == JointType::Revolute ? 2 : 5;
-    const double qd = (*v)[m.idx_v(i)];
     const int p = m.parent[i];
-    Vb_[i] = act_inv_motion(data_.Xup[i], Vb_[p]);
-    Vb_[i][ax] += qd;
-    Ab_[i] = act_inv_motion(data_.Xup[i], Ab_[p]) + cross_motion(Vb_[i], Vec6::Unit(ax) * qd);
+    Ab_[i] = act_inv_motion(data_.Xup[i], Ab_[p]);
+    detail::with_joint(m.joints[i], [&](auto J) {
+      J.add_bias_acceleration(Vb[i].data(), (*v)[m.idx_v(i)], Ab_[i].data());
+    });
   }
 }
 

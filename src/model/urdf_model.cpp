@@ -41,7 +41,7 @@ struct Builder {
   void add_body(int parent, const SE3& X_tree, JointType type, const urdf::Joint& j) {
     m.parent.push_back(parent);
     m.X_tree.push_back(X_tree);
-    m.joint_type.push_back(type);
+    m.joints.emplace_back(type);
     m.inertia.emplace_back();
     m.body_name.push_back(frame_name(j.child_link_name));
     m.joint_name.push_back(j.name);
@@ -188,16 +188,49 @@ struct Builder {
         }
         case urdf::Joint::FLOATING:
           throw ModelError("joint '" + j->name +
-                           "': type floating is not supported inside the tree (a free base is "
-                           "chosen with --floating / base: free)");
+                           "': a floating joint is supported only from the "
+                           "URDF's root link (the world) to the robot's base; its parent is '" +
+                           j->parent_link_name + "'");
         case urdf::Joint::PLANAR:
-          throw ModelError("joint '" + j->name + "': type planar is not supported");
+          throw ModelError("joint '" + j->name +
+                           "': type planar is not supported (lock it, or model it as two "
+                           "prismatic joints and a revolute joint)");
         default:
           throw ModelError("joint '" + j->name + "': unknown joint type");
       }
     }
   }
 };
+
+// The link the model's base starts from: the URDF's root, or, when the root holds only a
+// floating joint (the root is then the world, as in many URDFs), that joint's child, which
+// becomes the free base with the joint's origin as its rest pose.
+const urdf::Link& base_link(const urdf::ModelInterface& u, const urdf::Link& root, Model& m) {
+  const urdf::JointSharedPtr* fl = nullptr;
+  for (const auto& j : root.child_joints) {
+    if (j->type == urdf::Joint::FLOATING) fl = &j;
+  }
+  if (!fl) return root;
+  const urdf::Joint& j = **fl;
+  for (const auto& other : root.child_joints) {
+    if (other.get() != &j) {
+      throw ModelError("joint '" + j.name + "': the root link '" + root.name +
+                       "' before this floating joint is the world and may hold no other joint ('" +
+                       other->name + "')");
+    }
+  }
+  if (root.inertial || root.visual || root.collision || !root.visual_array.empty() ||
+      !root.collision_array.empty()) {
+    throw ModelError("joint '" + j.name + "': the root link '" + root.name +
+                     "' before this floating joint is the world and may have no inertial, "
+                     "visual or collision");
+  }
+  const urdf::LinkConstSharedPtr child = u.getLink(j.child_link_name);
+  if (!child) throw ModelError("joint '" + j.name + "': child link missing");
+  m.floating = true;
+  m.X_tree[0] = to_se3(j.parent_to_joint_origin_transform);
+  return *child;
+}
 
 }  // namespace
 
@@ -217,9 +250,10 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.start_with_base(frame_name(root->name));
-  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
-  b.visit(*root, 0, SE3());
+  m.start_with_base(root->name);
+  const urdf::Link& start = base_link(*u, *root, m);
+  m.root_link = m.body_name[0] = start.name;
+  b.visit(start, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).
   for (int i = m.floating ? 0 : 1; i <= m.n; ++i) {

@@ -340,7 +340,7 @@ double ControllerSet::position_error(int i, double target, double q) const {
   const double lo = model_.lower[i], hi = model_.upper[i];
   const bool limited = std::isfinite(lo) && std::isfinite(hi);
   if (limited) target = std::min(std::max(target, lo), hi);  // enforceJointLimits
-  if (model_.joint_type[i] == JointType::Revolute && !limited) {
+  if (model_.joints[i].angular() && !limited) {
     // Continuous: the shortest way round, in [-pi, pi].
     const double two_pi = 2 * M_PI;
     double e = std::fmod(target - q, two_pi);

@@ -33,7 +33,7 @@ void write_row(std::ofstream& out, Simulator& sim) {
   for (int k = 0; k < 3; ++k) put(x.base.p[k]);
   const Eigen::Vector4d q = quaternion_from_rotation(x.base.R);
   for (int k = 0; k < 4; ++k) put(q[k]);
-  const int off = sim.model().floating ? 6 : 0;
+  const int off = sim.model().nv_base();
   for (int k = 0; k < off; ++k) put(x.v[k]);
   for (int k = 0; k < x.q.size(); ++k) put(x.q[k]);
   for (int k = 0; k < x.q.size(); ++k) put(x.v[off + k]);

@@ -314,7 +314,6 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
 State scene_state(const Scene& scene, const Model& model) {
   State x(model);
   x.base = scene.base_pose;
-  const int off = model.floating ? 6 : 0;
   std::unordered_map<std::string, int> joints;
   for (int i = 1; i <= model.n; ++i) joints.emplace(model.joint_name[i], i);
   auto index = [&](const std::string& joint, const char* key) {
@@ -326,10 +325,10 @@ State scene_state(const Scene& scene, const Model& model) {
     return it->second;
   };
   for (const auto& kv : scene.initial_positions) {
-    x.q[index(kv.first, "initial_positions") - 1] = kv.second;
+    x.q[model.idx_q(index(kv.first, "initial_positions"))] = kv.second;
   }
   for (const auto& kv : scene.initial_velocities) {
-    x.v[off + index(kv.first, "initial_velocities") - 1] = kv.second;
+    x.v[model.idx_v(index(kv.first, "initial_velocities"))] = kv.second;
   }
   if (model.floating) {
     x.v.head<6>() = scene.base_twist;
@@ -404,15 +403,14 @@ std::string model_to_urdf(const Model& model, const GeometryModel* geometry) {
     o << "  </link>\n";
   }
   for (int i = 1; i <= model.n; ++i) {
-    const bool rev = model.joint_type[i] == JointType::Revolute;
     const bool limited = std::isfinite(model.lower[i]) && std::isfinite(model.upper[i]);
-    const char* type = !rev ? "prismatic" : (limited ? "revolute" : "continuous");
+    const std::string type = model.joints[i].urdf_type(limited);
     o << "  <joint name=\"" << model.joint_name[i] << "\" type=\"" << type << "\">";
     o << "<parent link=\"" << model.body_name[model.parent[i]] << "\"/><child link=\""
       << model.body_name[i] << "\"/>";
     origin(model.X_tree[i]);
-    o << "<axis xyz=\"0 0 1\"/>";
-    if (limited || !rev) {
+    o << "<axis xyz=\"0 0 1\"/>";  // every joint's axis is its body's z (model.h)
+    if (type != "continuous") {    // URDF requires <limit> on the other moving joints
       const double e = std::isfinite(model.effort[i]) ? model.effort[i] : 1e9;
       const double vl = std::isfinite(model.velocity[i]) ? model.velocity[i] : 1e9;
       o << "<limit lower=\"" << (limited ? model.lower[i] : -1e9) << "\" upper=\""

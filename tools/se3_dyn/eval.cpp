@@ -89,10 +89,8 @@ int cmd_info(int argc, char** argv) {
   std::printf("total mass: %.6g kg\n", m.total_mass());
   for (int i = 1; i <= m.n; ++i) {
     std::printf("  %3d %-28s %-9s parent %-24s limits [%g, %g] effort %g damping %g friction %g\n",
-                i, m.joint_name[i].c_str(),
-                m.joint_type[i] == se3::JointType::Revolute ? "revolute" : "prismatic",
-                m.body_name[m.parent[i]].c_str(), m.lower[i], m.upper[i], m.effort[i], m.damping[i],
-                m.friction[i]);
+                i, m.joint_name[i].c_str(), m.joints[i].name(), m.body_name[m.parent[i]].c_str(),
+                m.lower[i], m.upper[i], m.effort[i], m.damping[i], m.friction[i]);
   }
   for (const auto& w : m.warnings) std::printf("warning: %s\n", w.c_str());
   return 0;
@@ -119,7 +117,7 @@ void eval_csv(const se3::Model& m, const std::string& algo, std::istream& input,
                      std::to_string(se3::limits::kMaxDenseNv) + " it allows (docs/robustness.md)");
   }
   se3::Data d(m);
-  const int n = m.n, off = m.floating ? 6 : 0;
+  const int n = m.n, off = m.nv_base();
   const bool needs_v = algo == "rnea" || algo == "aba";
 
   std::string line;

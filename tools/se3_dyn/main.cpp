@@ -6,6 +6,7 @@
 #include <new>
 
 #include "cli.h"
+#include "se3_sim/integrate.h"
 
 namespace {
 
@@ -28,7 +29,10 @@ const char* kUsage =
 int main(int argc, char** argv) {
   using namespace se3_dyn;
   if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    std::FILE* out = argc < 2 ? stderr : stdout;
+    std::fputs(kUsage, out);
+    std::fprintf(out, "integrators (--integrator NAME; the registry's list):\n%s",
+                 se3::stepper_help().c_str());
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
