@@ -117,7 +117,7 @@ Scene robot(const std::string& file, const std::string& name, double simplify = 
   }
   for (int i = 0; i < m.n; ++i) {  // within the limits (fingers closed)
     const int b = i + 1;
-    if (m.joint_type[b] == JointType::Prismatic) q(i) = 0.0;
+    if (m.joints[b].type == JointType::Prismatic) q(i) = 0.0;
     q(i) = std::min(std::max(q(i), m.lower[b]), m.upper[b]);
   }
   forward_kinematics(m, data, SE3(), q);
@@ -477,7 +477,7 @@ int simplify_report() {
         const int b = i + 1;
         const double lo = std::isfinite(m.lower[b]) ? m.lower[b] : -M_PI;
         const double hi = std::isfinite(m.upper[b]) ? m.upper[b] : M_PI;
-        q(i) = m.joint_type[b] == JointType::Prismatic
+        q(i) = m.joints[b].type == JointType::Prismatic
                    ? lo
                    : lo + (0.5 + 0.4 * std::sin(1.7 * (i + 1) * (k + 1))) * (hi - lo);
       }

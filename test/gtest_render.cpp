@@ -468,7 +468,7 @@ VecX pose_at(const Model& m, double t, int seed) {
     const double lo = std::isfinite(m.lower[b]) ? m.lower[b] : -M_PI;
     const double hi = std::isfinite(m.upper[b]) ? m.upper[b] : M_PI;
     const double f = 0.5 + 0.4 * std::sin(1.7 * (i + 1) * (seed + 1) + t);
-    q(i) = m.joint_type[b] == JointType::Prismatic ? lo : lo + f * (hi - lo);
+    q(i) = m.joints[b].type == JointType::Prismatic ? lo : lo + f * (hi - lo);
   }
   return q;
 }

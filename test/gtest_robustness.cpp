@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 
+#include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/sim.h"
 
@@ -191,8 +192,9 @@ TEST(UrdfFormatString, PercentConversionsInAttributesNeitherCrashNorVanish) {
   const Model named = model_from_urdf_string(urdfs[4]);
   EXPECT_EQ(named.name, "r%20x");
   EXPECT_EQ(named.links[0].name, "a%n");
-  ASSERT_EQ(named.visuals.size(), 1u);
-  EXPECT_EQ(named.visuals[0].mesh, "m%20" + bad + ".stl");
+  const GeometryModel g = geometry_from_urdf_string(named, urdfs[4]);
+  ASSERT_EQ(g.visuals.size(), 1u);
+  EXPECT_EQ(g.visuals[0].shape.resource, "m%20" + bad + ".stl");
 }
 
 // ---------------------------------------------------------------- stack overflows

@@ -50,7 +50,7 @@ inline Vec6L crossf(const Vec6L& V, const Vec6L& F) {
 /// ddq (nv) for tau (nv; the first six entries a wrench on a free base).
 inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::VectorXd& q,
                              const Eigen::VectorXd& v, const Eigen::VectorXd& tau) {
-  const int n = m.n, off = m.nv_base();
+  const int n = m.n;
   std::vector<Mat6L> Xi(n + 1), IA(n + 1);
   std::vector<Vec6L> V(n + 1), c(n + 1), pA(n + 1), U(n + 1), A(n + 1);
   std::vector<L> D(n + 1), u(n + 1);
