@@ -250,9 +250,10 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.start_with_base(root->name);
+  m.start_with_base(frame_name(root->name));
+  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
   const urdf::Link& start = base_link(*u, *root, m);
-  m.root_link = m.body_name[0] = start.name;
+  m.root_link = m.body_name[0] = frame_name(start.name);
   b.visit(start, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).
