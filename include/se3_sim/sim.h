@@ -21,8 +21,10 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A scene (config/scenes/*.yaml). Keys, all optional except robot:
+/// A scene (config/scenes/*.yaml). Keys, all optional:
 ///   name: text                      robot: data/robots/panda.urdf | chain:N
+///       without robot, the robot comes from outside (scene_model's urdf_xml, e.g. the
+///       robot_description parameter); a scene that names no joints fits any robot
 ///   base: free | fixed              base_pose: {position: [x,y,z], orientation: [x,y,z,w]}
 ///   base_twist: [wx,wy,wz,vx,vy,vz] (base frame; free base only)
 ///   base_inertia: {mass: m, com: [x,y,z], inertia: [ixx,iyy,izz(,ixy,ixz,iyz)]}
@@ -48,6 +50,7 @@ struct Scene {
   std::string robot;       ///< as written
   std::string robot_path;  ///< resolved file, or "chain:N"
   bool floating = true;
+  bool base_given = false;  ///< the scene says base: free or fixed
   bool has_base_inertia = false;
   double base_mass = 0;
   Vec3 base_com = Vec3::Zero();

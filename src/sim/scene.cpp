@@ -93,6 +93,7 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
       const std::string b = r.text(v, k);
       if (b != "free" && b != "fixed") r.fail(v, "'base' is free or fixed, got '" + b + "'");
       s.floating = b == "free";
+      s.base_given = true;
     } else if (k == "base_pose") {
       if (!v.is_map()) r.fail(v, "'base_pose' needs {position: [..], orientation: [..]}");
       r.only_keys(v, "base_pose", {"position", "orientation"});
@@ -225,9 +226,10 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
       }
     }
   }
-  if (!has_robot) r.fail(root, "the scene needs 'robot: <urdf path or chain:N>'");
   if (s.name.empty()) s.name = s.robot;
-  if (s.robot.compare(0, 6, "chain:") == 0) {
+  if (!has_robot) {
+    // No robot: it comes from outside (scene_model's urdf_xml, e.g. robot_description).
+  } else if (s.robot.compare(0, 6, "chain:") == 0) {
     char* end = nullptr;
     const long n = std::strtol(s.robot.c_str() + 6, &end, 10);
     if (*end != '\0' || n < 1 || n > 100000) {
@@ -276,6 +278,9 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
     m = make_chain(std::atoi(scene.robot_path.c_str() + 6), scene.floating, scene.chain_masses,
                    scene.chain_length);
   } else {
+    if (urdf_xml.empty() && scene.robot_path.empty()) {
+      throw SceneError(scene.file + ": the scene names no robot and none was given");
+    }
     UrdfOptions opt;
     opt.floating = scene.floating;
     opt.locked = scene.locked_joints;
