@@ -1,13 +1,18 @@
 #!/usr/bin/env bash
-# Regenerates every chart of docs/charts/ from scratch (issue 6): runs charts_data (CSV data and
-# printed fits: orders, slopes, scaling exponents) and plots it with Debian's python3-matplotlib.
-# Installs what is missing (with python3-matplotlib) and builds first; CHARTS_BIN overrides where
-# charts_data is (then nothing is built).
-# Usage: scripts/charts.sh [--quick]    (--quick: shorter runs, for a smoke test)
+# Regenerates every chart of docs/charts/ from scratch (issues 6 and 16): runs charts_data (CSV
+# data and printed fits: orders, slopes, scaling exponents) and plots it with Debian's
+# python3-matplotlib. The work-precision charts hold MuJoCo 2.2's and DART 6.12's integrators
+# beside ours; study_*.png reproduce the measures of Erez, Tassa and Todorov (ICRA 2015) with
+# se3_sim, MuJoCo and DART in one run; stability.png shows where methods fail (docs/peers.md).
+# Installs what is missing (with the peers MuJoCo and DART, and python3-matplotlib) and builds
+# first; CHARTS_BIN overrides where charts_data is (then nothing is built).
+# Usage: scripts/charts.sh [--quick] [--only work|energy|dynamics|study|stability]
+#   (--quick: shorter runs, for a smoke test; --only: one part, the other charts are left as
+#   they are)
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 if [[ -z "${CHARTS_BIN:-}" ]]; then
-  bash "$repo/scripts/deps.sh"
+  bash "$repo/scripts/deps.sh" --test
   /usr/bin/python3 -c 'import matplotlib' 2>/dev/null ||
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
       python3-matplotlib >/dev/null

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs, from Debian 12's own packages, whatever se3_sim needs that is missing.
-# Usage: scripts/deps.sh [--test]   (--test adds the oracles DART and KDL and the test tools)
+# Usage: scripts/deps.sh [--test]   (--test adds the oracles and peers DART, KDL and MuJoCo, and
+# valgrind for the instruction counts of bench_peers --callgrind and scripts/callgrind_step.py)
 set -euo pipefail
 pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   libstd-msgs-dev ros-std-msgs libstd-srvs-dev ros-std-srvs
@@ -12,7 +13,7 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   python3-rosservice python3-roslaunch python3-std-srvs)
 if [[ "${1:-}" == "--test" ]]; then
   pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
-    ros-robot-state-publisher)
+    ros-robot-state-publisher libmujoco-dev valgrind)
 fi
 missing=()
 for p in "${pkgs[@]}"; do

@@ -309,3 +309,52 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// The energy balance (issue 16): with joint damping, friction and a command the energy changes
+// by the work W done on the system; the Simulator accumulates W (Simulator::work), and
+// E(t) - E(0) - W(t) is what the integrator itself drifts. Double pendulum with damping 0.02 and
+// friction 0.01 (regularized over 0.1 rad/s) on both joints, a constant torque on the first,
+// from 0.5 / -0.3 rad with rates, dt = 1 ms for 5 s.
+TEST(EnergyBalance, WorkOfDampingFrictionAndCommandsLeavesOnlyTheIntegratorsDrift) {
+  const Scene scene = load_scene(SE3_SIM_SOURCE_DIR "/config/scenes/pendulum.yaml");
+  Model m = scene_model(scene);
+  for (int i = 1; i <= m.n; ++i) m.damping[i] = 0.02, m.friction[i] = 0.01;
+  State x0 = scene_state(scene, m);
+  x0.v << 2.0, -1.0;
+  for (const std::string name : {"rkmk4", "symplectic_euler"}) {
+    SimConfig cfg;
+    cfg.integrator = name;
+    cfg.dt = 1e-3;
+    cfg.stepper.friction_eps = 0.1;
+    Simulator sim(m, x0, cfg);
+    sim.set_joint_effort(1, 0.05);
+    const double T0 = sim.initial_kinetic_energy();
+    double drift = 0, balance = 0;
+    for (int k = 0; k < 5000; ++k) {
+      ASSERT_TRUE(sim.step()) << sim.failure();
+      const double dE = sim.kinetic_energy() + sim.potential_energy() - T0;
+      drift = std::max(drift, std::abs(dE) / T0);
+      balance = std::max(balance, std::abs(dE - sim.work()) / T0);
+    }
+    std::printf(
+        "  %-16s T0 = %.3g J: max |E - E0| / T0 = %.3g, max |E - E0 - W| / T0 = %.3g, W = %.4g J\n",
+        name.c_str(), T0, drift, balance, sim.work());
+    EXPECT_GT(drift, 10) << "damping and the command change the energy by much more than T0";
+    EXPECT_LT(sim.work(), -0.5) << "damping and friction remove more than the command adds";
+    // Against the energy exchanged |W|: rkmk4's own drift is ~1e-12 here, what is left is the
+    // trapezoidal rule's O(dt^2) on W (1.3e-6 |W|); semi-implicit Euler's O(dt) energy error
+    // is in its figure (2.8e-3 |W|).
+    EXPECT_LT(balance * T0, (name == "rkmk4" ? 1e-5 : 1e-2) * std::abs(sim.work()));
+    EXPECT_LT(balance, 1e-2 * drift);
+    sim.reset();
+    EXPECT_EQ(sim.work(), 0.0);
+  }
+  // The headless run reports both figures.
+  SimulateOptions o;
+  o.scene = SE3_SIM_SOURCE_DIR "/config/scenes/pendulum.yaml";
+  o.duration = 2.0;
+  const SimulateResult r = simulate_headless(o);
+  EXPECT_GT(r.energy_drift_rel, 1e-3) << "the URDF's damping removes energy";
+  EXPECT_LT(r.energy_balance_rel, 1e-5);  // 3.2e-6: the trapezoidal rule's O(dt^2)
+  EXPECT_NE(simulate_result_json(r).find("\"energy_balance_rel\": "), std::string::npos);
+}

@@ -246,6 +246,12 @@ class Simulator {
   Vec3 center_of_mass();
   /// Initial kinetic energy (after the last reset).
   double initial_kinetic_energy() const { return T0_; }
+  /// Work done on the system since the last reset by the commanded forces and the joint damping
+  /// and friction (gravity is in the potential), J: per step the trapezoidal rule on the power
+  /// (command + passive forces) . v at the step's ends, so O(dt^2) accurate. The energy drift
+  /// of the integrator is then E(t) - E(0) - work(), E = kinetic + potential_energy(); it holds
+  /// between resets (set_state is a jump it does not count; constraint forces are not in it).
+  double work() const { return W_; }
   /// World pose of every entry of Model::links, into out (resized to links.size()).
   void link_poses(std::vector<SE3>& out);
   /// World pose of every body (after link_poses or center_of_mass; valid until the next call).
@@ -271,6 +277,8 @@ class Simulator {
     Vec6 wrench = Vec6::Zero();
     std::int64_t steps_left = -1;  ///< -1: until cleared
   };
+  /// The power of the joint damping and friction at the current state, W.
+  double passive_power() const;
 
   std::unique_ptr<Model> model_;
   SimConfig config_;
@@ -293,6 +301,14 @@ class Simulator {
   int steps_to_energy_check_ = 1;  ///< the energy is checked on the step that takes it to 0
   std::string failure_;
   double T0_ = 0, U0_ = 0, E_ref_ = 1;
+  double W_ = 0, W_checked_ = 0;  ///< work(), and its value at last_checked_
+  /// Joints with damping (c = d) and with friction (c = f): the terms of passive_power().
+  struct PassiveJoint {
+    int k;
+    double c;
+  };
+  std::vector<PassiveJoint> damped_, rubbing_;
+  double passive_power_ = 0;  ///< passive_power() at state_
 };
 
 /// Adds to tau (size nv) the generalized force J^T w of a wrench w = [torque; force] (world
@@ -333,6 +349,9 @@ struct SimulateResult {
   /// max |E(t) - E(0)| / T(0), potential measured from the initial configuration (damping and
   /// friction count as drift). When T(0) = 0 the scale is max_t T(t) instead; NaN if still 0.
   double energy_drift_rel = std::numeric_limits<double>::quiet_NaN();
+  /// max |E(t) - E(0) - W(t)| / T(0) (same scale): the drift alone, W the work of commands,
+  /// damping and friction (Simulator::work); energy_drift_rel counts dissipation as drift.
+  double energy_balance_rel = std::numeric_limits<double>::quiet_NaN();
   /// max |h(t) - h(0)| / |h(0)| (world-frame spatial momentum); free base and zero gravity only.
   double momentum_drift_rel = std::numeric_limits<double>::quiet_NaN();
   /// max over the run of Simulator::constraint_error() (scenes with constraints; else NaN).

@@ -865,6 +865,7 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   const double T = sim_->kinetic_energy(), U = sim_->potential_energy();
   const double T0 = sim_->initial_kinetic_energy();
   st.energy_drift_rel = finite_or_zero(std::abs(T + U - T0) / std::max(T0, 1e-12));
+  st.energy_balance_rel = finite_or_zero(std::abs(T + U - T0 - sim_->work()) / std::max(T0, 1e-12));
   st.steps = sim_->steps();
   st.accepted_commands = accepted_;
   st.rejected_commands = rejected_;

@@ -98,7 +98,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   const double T0 = sim.kinetic_energy();
   const Vec6 h0 = sim.momentum();
   const Vec3 c0 = sim.center_of_mass();
-  double dE = 0, T_max = T0, dh = 0, dc = 0;
+  double dE = 0, dB = 0, T_max = T0, dh = 0, dc = 0;
   double dcon = sim.constraints() ? sim.constraint_error() : 0.0;
   const std::uint64_t n_steps = static_cast<std::uint64_t>(std::llround(o.duration / scene.dt));
   using clock = std::chrono::steady_clock;
@@ -116,6 +116,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     const double T = sim.kinetic_energy();
     const double E = T + sim.potential_energy();
     dE = std::max(dE, std::abs(E - T0));
+    dB = std::max(dB, std::abs(E - T0 - sim.work()));
     T_max = std::max(T_max, T);
     if (conserve_momentum) {
       dh = std::max(dh, (sim.momentum() - h0).norm());
@@ -133,6 +134,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   r.evaluations = sim.evaluations();
   const double scale = T0 > 0 ? T0 : T_max;
   if (scale > 0) r.energy_drift_rel = dE / scale;
+  if (scale > 0) r.energy_balance_rel = dB / scale;
   if (sim.constraints()) r.constraint_error_max = dcon;
   if (conserve_momentum) {
     r.momentum_drift_rel = h0.norm() > 0 ? dh / h0.norm() : dh;
@@ -157,6 +159,7 @@ std::string simulate_result_json(const SimulateResult& r) {
   o << "{\"integrator\": \"" << name << "\", \"dt\": " << num(r.dt)
     << ", \"sim_s\": " << num(r.sim_s) << ", \"wall_s\": " << num(r.wall_s)
     << ", \"steps\": " << r.steps << ", \"energy_drift_rel\": " << num(r.energy_drift_rel)
+    << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max) << "}";
   return o.str();

@@ -79,6 +79,10 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
   }
   if (config_.guard.energy_check_every < 1) config_.guard.energy_check_every = 1;
   stepper_ = make_stepper(config_.integrator, *model_, config_.stepper);
+  for (int i = 1; config_.stepper.passive_forces && i <= model_->n; ++i) {
+    if (model_->damping[i] != 0) damped_.push_back({model_->idx_v(i), model_->damping[i]});
+    if (model_->friction[i] != 0) rubbing_.push_back({model_->idx_v(i), model_->friction[i]});
+  }
   set_initial_state(initial);
   reset();
 }
@@ -107,6 +111,7 @@ void Simulator::set_state(const State& s) {
   last_checked_time_ = time_;
   last_checked_steps_ = steps_;
   stepper_->restart();
+  passive_power_ = passive_power();
 }
 
 void Simulator::reset() {
@@ -127,6 +132,8 @@ void Simulator::reset() {
   if (constraints_start_) constraints_ = std::make_unique<ConstraintSystem>(*constraints_start_);
   stepper_->restart();
   refresh_reference();
+  W_ = W_checked_ = 0;
+  passive_power_ = passive_power();
 }
 
 void Simulator::refresh_reference() {
@@ -317,6 +324,15 @@ void Simulator::applied_joint_efforts(VecX& out) {
 
 namespace {
 
+// x . y for the short vectors of a step (Eigen's dynamic-size dot costs more in set-up).
+double dot(int n, const double* x, const double* y) {
+  double a = 0, b = 0;
+  int k = 0;
+  for (; k + 2 <= n; k += 2) a += x[k] * y[k], b += x[k + 1] * y[k + 1];
+  if (k < n) a += x[k] * y[k];
+  return a + b;
+}
+
 // to = from, for states of the same model (no resize check, no memcpy call for a dozen numbers).
 void save(const State& from, State& to) {
   to.base = from.base;
@@ -353,6 +369,8 @@ bool Simulator::energy_ok() {
 bool Simulator::step() {
   if (!failure_.empty()) return false;
   const VecX& tau = step_forces();
+  const int nv = model_->nv;
+  const double P0 = dot(nv, tau.data(), state_.v.data()) + passive_power_;  // at the start
   const StepInfo info = constraints_
                             ? constrained_step(*constraints_, *stepper_, state_, tau, config_.dt)
                             : stepper_->step(state_, tau, config_.dt);
@@ -366,10 +384,13 @@ bool Simulator::step() {
   }
   ++steps_;
   time_ += config_.dt;
+  passive_power_ = passive_power();
+  W_ += 0.5 * config_.dt * (P0 + dot(nv, tau.data(), state_.v.data()) + passive_power_);
   save(state_, last_good_);
   if (!wrenches_.empty()) count_down_link_wrenches();
   if (energy_step) {
     save(state_, last_checked_);
+    W_checked_ = W_;
     last_checked_time_ = time_;
     last_checked_steps_ = steps_;
     steps_to_energy_check_ = config_.guard.energy_check_every;
@@ -405,11 +426,23 @@ void Simulator::roll_back(const StepInfo& info) {
   if (to_checked) {
     time_ = last_checked_time_;
     steps_ = last_checked_steps_;
+    W_ = W_checked_;
   }
   failure_ = "diverged at t = " + std::to_string(time_ + config_.dt) + " s with " +
              stepper_->name() + ", dt = " + std::to_string(config_.dt) + ": " + why +
              "; state rolled back to t = " + std::to_string(time_) + " s";
   stepper_->restart();
+  passive_power_ = passive_power();
+}
+
+double Simulator::passive_power() const {
+  const double* v = state_.v.data();
+  double P = 0;
+  for (const PassiveJoint& j : damped_) P -= j.c * v[j.k] * v[j.k];
+  for (const PassiveJoint& j : rubbing_) {
+    P -= j.c * std::tanh(v[j.k] / config_.stepper.friction_eps) * v[j.k];
+  }
+  return P;
 }
 
 void Simulator::count_down_link_wrenches() {

@@ -12,6 +12,8 @@
 // dynamics  dyn_scaling.csv: ABA, CRBA + Cholesky, D^-1 (minv) time and accuracy for chains of
 //           1..500 bodies; dyn_mass_ratio.csv: accuracy when the link masses span up to 1e8.
 //           Accuracy is measured against an ABA evaluated in long double.
+// study     study.csv, stability: MuJoCo and DART beside ours (peers_charts.h); the work
+//           charts also get the peers' integrators (issue 16).
 #include <time.h>
 
 #include <Eigen/Cholesky>
@@ -28,6 +30,7 @@
 #include <vector>
 
 #include "aba_long_double.h"
+#include "peers_charts.h"
 #include "se3_sim/integrate.h"
 #include "se3_sim/sim.h"
 
@@ -236,6 +239,12 @@ void work_precision(const WpScene& sc, const std::string& outdir) {
     }
   }
   std::printf("  %-17s error ~ evaluations^%.2f (theory -5)\n", "rkmk45", fit_slope(ev, es));
+  // The peers' own integrators on the same scene (MuJoCo's implicit one where damping is on).
+  std::vector<double> peer_dts = sc.dts;
+  peer_dts.insert(peer_dts.end(), sc.dts_first.begin(), sc.dts_first.end());
+  bool damped = false;
+  for (int i = 1; i <= sc.model.n; ++i) damped |= sc.model.damping[i] > 0;
+  charts::peer_work_precision(sc.model, sc.x0, ref, sc.T, peer_dts, damped, f);
 }
 
 // ------------------------------------------------------------------ energy over long runs
@@ -440,8 +449,8 @@ void dynamics_charts(const std::string& outdir, bool quick) {
 int main(int argc, char** argv) {
   register_extra_steppers();
   if (argc < 2) {
-    std::cerr << "usage: charts_data OUTDIR [--root PACKAGE_DIR] [--only work|energy|dynamics] "
-                 "[--quick]\n";
+    std::cerr << "usage: charts_data OUTDIR [--root PACKAGE_DIR] [--only "
+                 "work|energy|dynamics|study|stability] [--quick]\n";
     return 2;
   }
   std::string outdir = argv[1], root = ".", only;
@@ -527,6 +536,8 @@ int main(int argc, char** argv) {
       }
     }
     if (only.empty() || only == "dynamics") dynamics_charts(outdir, quick);
+    if (only.empty() || only == "study") charts::study(outdir, root, quick);
+    if (only.empty() || only == "stability") charts::stability(outdir, root, quick);
   } catch (const std::exception& e) {
     std::cerr << "charts_data: " << e.what() << "\n";
     return 1;
