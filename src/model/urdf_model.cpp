@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "se3_sim/model.h"
+#include "urdf_quirks.h"
 
 namespace se3 {
 namespace {
@@ -243,7 +244,9 @@ std::mutex g_console_mutex;
 
 }  // namespace
 
-Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
+Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options) {
+  std::vector<std::string> quirks;
+  const std::string text = urdf_text_quirks(xml, quirks);  // urdf_quirks.h
   urdf::ModelInterfaceSharedPtr u;
   std::string err;
   {
@@ -252,7 +255,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
     console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
     console_bridge::useOutputHandler(&h);
     try {
-      u = urdf::parseURDF(xml);
+      u = urdf::parseURDF(text);
     } catch (const std::exception& e) {
       h.first_error = e.what();
     }
@@ -266,7 +269,10 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   const urdf::LinkConstSharedPtr root = u->getRoot();
   if (!root) throw ModelError("URDF has no root link");
 
+  UrdfOptions opt = options;
+  urdf_model_quirks(*u, opt.locked, quirks);  // joints that move only massless links: locked
   Builder b{*u, opt, Model{}};
+  b.m.warnings = quirks;
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
@@ -290,6 +296,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   }
   m.finalize();
   m.validate();
+  group_quirk_warnings(m.warnings);
   return m;
 }
 
