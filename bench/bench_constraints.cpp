@@ -3,8 +3,9 @@
 //                    vs rkmk4 on the open tree;
 //   pinned_chain     rkmk4 with pin + axis rows on a free base, vs the free chain;
 //   quadruped_ground velocity-level time stepping with PGS contact (solo12, standing), vs
-//                    symplectic_euler in free fall;
-//   panda_limits     time stepping with the joint-limit rows (all at a limit), vs symplectic_euler.
+//                    semi_implicit_euler in free fall;
+//   panda_limits     time stepping with the joint-limit rows (all at a limit), vs
+//   semi_implicit_euler.
 // Each constrained benchmark reports `free_ns` (the unconstrained step, same run) and
 // `x_free` = constrained / unconstrained.
 //
@@ -72,12 +73,12 @@ Pair make_pair_for(const std::string& which) {
     sc.robot = "data/robots/panda.urdf";
     sc.robot_path = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
     sc.floating = false;
-    sc.integrator = "symplectic_euler";
+    sc.integrator = "semi_implicit_euler";
     Model m = scene_model(sc);
     State x(m);
     for (int i = 1; i <= m.n; ++i) x.q[i - 1] = m.upper[i];  // every joint at its upper limit
     SimConfig cfg;
-    cfg.integrator = "symplectic_euler";
+    cfg.integrator = "semi_implicit_euler";
     p.free = std::make_unique<Simulator>(m, x, cfg);
     p.constrained = std::make_unique<Simulator>(m, x, cfg);
     ConstraintSpec spec;

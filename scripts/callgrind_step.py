@@ -23,11 +23,11 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # The catkin workspace of scripts/build.sh (scripts/env.sh): $SE3_SIM_WS, else beside the clone.
 WS = os.environ.get("SE3_SIM_WS") or os.path.join(os.path.dirname(REPO), os.path.basename(REPO) + "_ws")
 SE3_DYN = os.path.join(WS, "devel/lib/se3_sim/se3_dyn")
-DEFAULT = ["fixed_panda:symplectic_euler", "fixed_panda:euler", "fixed_panda:rkmk4",
-           "satellite_arm:symplectic_euler", "satellite_arm:rkmk4",
-           "fixed_arm:symplectic_euler", "fixed_arm:rkmk4",
-           "chain20:symplectic_euler", "chain20:rkmk4",
-           "pendulum:symplectic_euler", "pendulum:rkmk4"]
+DEFAULT = ["fixed_panda:semi_implicit_euler", "fixed_panda:euler", "fixed_panda:rkmk4",
+           "satellite_arm:semi_implicit_euler", "satellite_arm:rkmk4",
+           "fixed_arm:semi_implicit_euler", "fixed_arm:rkmk4",
+           "chain20:semi_implicit_euler", "chain20:rkmk4",
+           "pendulum:semi_implicit_euler", "pendulum:rkmk4"]
 
 
 def inclusive(out_file):
@@ -70,7 +70,7 @@ def main():
           f"{'overhead':>9} {'of which stepper':>17}")
     for case in a.cases:
         scene, _, integ = case.partition(":")
-        sim, st, aba = measure(scene, integ or "symplectic_euler", a.steps)
+        sim, st, aba = measure(scene, integ or "semi_implicit_euler", a.steps)
         print(f"{scene:15} {integ:17} {sim:8.0f} {st:8.0f} {aba:8.0f} {sim - aba:9.0f} "
               f"{st - aba:17.0f}")
         sys.stdout.flush()

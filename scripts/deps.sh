@@ -9,11 +9,15 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   libvisualization-msgs-dev ros-visualization-msgs libros-rosgraph-msgs-dev ros-rosgraph-msgs
   libtf2-ros-dev libtf2-msgs-dev ros-tf2-msgs ros-message-generation
   liburdfdom-dev libeigen3-dev libcairo2-dev libbenchmark-dev libyaml-cpp-dev
+  libassimp-dev libmeshoptimizer-dev libimage-transport-dev libroslib-dev libosmesa6-dev
   python3-rostest librostest-dev libgtest-dev python3-rostopic python3-tf2-msgs python3-sensor-msgs python3-std-msgs python3-rospy
   python3-rosservice python3-roslaunch python3-std-srvs)
 if [[ "${1:-}" == "--test" ]]; then
   pkgs+=(liborocos-kdl-dev libkdl-parser-dev libdart-dev libdart-utils-urdf-dev
-    ros-robot-state-publisher libmujoco-dev valgrind)
+    ros-robot-state-publisher libmujoco-dev valgrind
+    g++-aarch64-linux-gnu)
+  # the sanitizer build and the fuzz targets (scripts/sanitize.sh)
+  pkgs+=(clang libclang-rt-14-dev llvm libtinyxml-dev)
 fi
 missing=()
 for p in "${pkgs[@]}"; do

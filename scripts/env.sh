@@ -12,6 +12,11 @@ export SE3_SIM_WS=${SE3_SIM_WS:-$(dirname "$_se3_sim_repo")/$(basename "$_se3_si
 if [[ -f "$SE3_SIM_WS/devel/setup.bash" ]]; then
   source "$SE3_SIM_WS/devel/setup.bash"
 fi
+# The meshes of the robots in data/robots (package://example-robot-data/...).
+case ":${ROS_PACKAGE_PATH:-}:" in
+  *":$_se3_sim_repo/data/meshes:"*) ;;
+  *) export ROS_PACKAGE_PATH="$_se3_sim_repo/data/meshes${ROS_PACKAGE_PATH:+:$ROS_PACKAGE_PATH}" ;;
+esac
 export ROS_HOSTNAME=${ROS_HOSTNAME:-localhost}
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://localhost:11311}
 unset _se3_sim_repo

@@ -18,8 +18,9 @@ if [[ -n "$duration" ]]; then
   roslaunch se3_sim demo.launch "$@" &
   pid=$!
   sleep "$duration"
-  rosservice call /renderer/save_frame >/dev/null 2>&1 && sleep 1 &&
-    echo "se3_sim: last frame saved under /tmp (se3_sim_frame_*.png)" || true
+  # std_srvs/Trigger: the message is the PNG written (a new file, never over an earlier one).
+  saved=$(rosservice call /renderer/save_frame 2>/dev/null | sed -n 's/^message: *"\{0,1\}\([^"]*\)"\{0,1\}$/\1/p') || true
+  [[ -n "${saved:-}" ]] && echo "se3_sim: last frame saved as $saved" || true
   kill -INT "$pid" 2>/dev/null || true
   wait "$pid" || true
 else

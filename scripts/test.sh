@@ -15,4 +15,11 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/p
   -j"$(nproc)" tests > "$repo/.build/test.log" 2>&1 || { tail -n 40 "$repo/.build/test.log"; echo "se3_sim: test build failed"; echo "0 passed, 1 failed"; exit 1; }
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -j1 run_tests >> "$repo/.build/test.log" 2>&1 || true
+# The sanitizer build (ASan + UBSan) of the library and its gtests, the fuzz corpus replayed and
+# each fuzz target run for a few seconds; its results join the others (scripts/sanitize.sh).
+bash "$repo/scripts/sanitize.sh" --results "$ws/build/test_results" || true
+# Checks beyond GoogleTest and rostest, one test case each (check-*.xml).
+echo "se3_sim: arm64 cross-compile of the library (about a minute)"
+bash "$repo/scripts/cross_compile_arm64.sh" \
+  "$ws/build/test_results/se3_sim/check-cross_compile_arm64.xml" >> "$repo/.build/test.log" 2>&1 || true
 python3 "$repo/scripts/test_summary.py" "$ws/build/test_results"

@@ -4,7 +4,8 @@
 catkin writes, per gtest binary, gtest-<name>.xml; per rostest, rostest-<name>.xml holds one
 case per test node (did it run and pass), and the test node's own cases are in
 rosunit-<test-name>.xml. Counted: the gtest cases, the test nodes' own cases, and a rostest
-wrapper case only when it failed (a node that died or never started leaves no inner cases). A
+wrapper case only when it failed (a node that died or never started leaves no inner cases), and
+the cases of scripts/test.sh's own checks, check-<name>.xml (the arm64 cross-compile). A
 binary that crashed or never wrote results leaves MISSING-*.xml, counted as one failure. Prints the failed cases, then one line
 'N passed, N failed' (', N skipped' when some were skipped); exits 1 on any failure or when no
 test ran.
@@ -61,7 +62,7 @@ def main():
             print('FAILED  %s (no results: the test crashed or did not run)' % base)
             continue
         if not (base.startswith('gtest-') or base.startswith('rostest-')
-                or base.startswith('rosunit-')):
+                or base.startswith('rosunit-') or base.startswith('check-')):
             continue
         wrapper = base.startswith('rostest-')
         try:

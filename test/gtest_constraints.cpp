@@ -271,7 +271,7 @@ TEST(Constraints, JointLimitsHoldUnderLargeTorques) {
   ConstraintSpec spec;
   spec.joint_limits = true;
   ConstraintSystem cs(m, spec);
-  auto stepper = make_stepper("symplectic_euler", m);
+  auto stepper = make_stepper("semi_implicit_euler", m);
   State x(m);
   for (int i = 1; i <= m.n; ++i) {
     x.q[i - 1] = 0.5 * (m.lower[i] + m.upper[i]);
@@ -321,9 +321,11 @@ void slope_run(double mu, double duration, double& disp, double& vel, double& pe
   spec.ground_normal = Vec3(std::sin(a), 0, std::cos(a));
   spec.mu = mu;
   spec.contacts_from_collisions = true;
+  spec.geometry =
+      std::make_shared<GeometryModel>(geometry_from_urdf_string(m, box_urdf(0.3, 0.2, 0.1, 1.0)));
   ConstraintSystem cs(m, spec);
   StepperOptions so;
-  auto stepper = make_stepper("symplectic_euler", m, so);
+  auto stepper = make_stepper("semi_implicit_euler", m, so);
   State x(m);
   x.base.R = Eigen::AngleAxisd(a, Vec3::UnitY()).toRotationMatrix();
   x.base.p = 0.05 * spec.ground_normal;

@@ -393,7 +393,7 @@ TEST(LinkWrench, IsTheJacobianTransposeOfThePoint) {
           SE3 base = x.base;
           if (floating) base = x.base * exp_se3(e * v.head<6>());
           VecX q = x.q;
-          const int off = floating ? 6 : 0;
+          const int off = m.nv_base();
           for (int k = 0; k < m.n; ++k) q[k] += e * v[off + k];
           forward_kinematics(m, d, base, q);
           T[s] = d.oMb[L.body] * L.offset;

@@ -10,9 +10,11 @@
 #include <Eigen/SVD>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <type_traits>
 
+#include "../src/dynamics/row_kernel.h"
 #include "test_util.h"
 
 using namespace se3;
@@ -227,7 +229,7 @@ TEST(Dynamics, GravityIsTheGradientOfThePotential) {
     const VecX zero = VecX::Zero(m.nv);
     const VecX G = rnea(m, d, s.base, s.q, zero, zero);
     VecX grad(m.nv);
-    const int off = m.floating ? 6 : 0;
+    const int off = m.nv_base();
     for (int k = 0; k < m.nv; ++k) {
       auto V = [&](double e) {
         if (k < off) return potential_energy(m, d, s.base * exp_se3(e * Vec6::Unit(k)), s.q);
@@ -269,7 +271,7 @@ TEST(Dynamics, MomentumConservation) {
           const double qi = s.q[i - 1], qd = s.v[5 + i], qdd = a[5 + i];
           Vec6 S = Vec6::Zero();
           SE3 J;
-          if (m.joint_type[i] == JointType::Revolute) {
+          if (m.joints[i].type == JointType::Revolute) {
             S[2] = 1;
             J.R = Eigen::AngleAxisd(qi, Vec3::UnitZ()).toRotationMatrix();
           } else {
@@ -349,7 +351,7 @@ Mat3L hat_ld(const Vec3L& a) {
 // The mass matrix assembled in long double straight from the model, independently of crba:
 // D = sum_i J_i^T I_i J_i with world-frame body Jacobians J_i and world-frame inertias I_i.
 MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
-  const int off = m.floating ? 6 : 0;
+  const int off = m.nv_base();
   std::vector<Mat3L> R(m.n + 1);
   std::vector<Vec3L> p(m.n + 1);
   R[0] = base.R.cast<LD>();
@@ -361,7 +363,7 @@ MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
     Mat3L Rj = Mat3L::Identity();
     Vec3L pj = Vec3L::Zero();
     const LD qi = q[i - 1];
-    if (m.joint_type[i] == JointType::Revolute) {
+    if (m.joints[i].type == JointType::Revolute) {
       Rj << std::cos(qi), -std::sin(qi), 0, std::sin(qi), std::cos(qi), 0, 0, 0, 1;
     } else {
       pj << 0, 0, qi;
@@ -384,7 +386,7 @@ MatXL mass_matrix_long_double(const Model& m, const SE3& base, const VecX& q) {
     }
     for (int j = i; j >= 1; j = m.parent[j]) {
       const Vec3L z = R[j].col(2);
-      if (m.joint_type[j] == JointType::Revolute) {
+      if (m.joints[j].type == JointType::Revolute) {
         J.col(off + j - 1) << z, p[j].cross(z);
       } else {
         J.col(off + j - 1) << Vec3L::Zero(), z;
@@ -501,6 +503,83 @@ TEST(Dynamics, CrbaPicksItsEvaluationByDepth) {
       EXPECT_TRUE(Data(c.model).crba_local) << c.label;
     }
   }
+}
+
+// ABA's documented contract, which RKMK's stage poses rely on (rkmk.cpp, stage_pose): the base
+// pose enters only through its rotation (gravity's direction in the base frame), and not at all
+// without gravity. Bit-identical accelerations, fixed and free base.
+TEST(Dynamics, AbaReadsTheBasePoseOnlyThroughGravity) {
+  for (bool floating : {false, true}) {
+    Model m = make_chain(7, floating, {2.0, 1.0});
+    Data d(m);
+    std::mt19937_64 rng(31);
+    const RandomState s = se3_test::random_state(m, rng);
+    const SE3 moved(s.base.R, s.base.p + Vec3(3.0, -1.0, 2.5));
+    const VecX a = aba(m, d, s.base, s.q, s.v, s.u);
+    EXPECT_EQ(aba(m, d, moved, s.q, s.v, s.u), a) << floating;
+    const SE3 turned(exp_so3(Vec3(0.4, -0.3, 1.1)) * s.base.R, s.base.p);
+    EXPECT_NE(aba(m, d, turned, s.q, s.v, s.u), a) << floating;  // gravity turned
+    m.gravity.setZero();
+    const VecX a0 = aba(m, d, s.base, s.q, s.v, s.u);
+    EXPECT_EQ(aba(m, d, turned, s.q, s.v, s.u), a0) << floating;
+    EXPECT_EQ(aba(m, d, moved, s.q, s.v, s.u), a0) << floating;
+  }
+}
+
+// Data holds what its fields say: rnea and aba both leave the body twists V (those of
+// forward_kinematics with v) and the accelerations A with gravity folded in; for the same motion
+// (a = ABA(tau)) the two recursions agree on A, and D^-1 and crba leave their matrices.
+TEST(Dynamics, DataFieldsAreFilledAsDocumented) {
+  for (bool floating : {false, true}) {
+    const Model m = make_chain(9, floating, {1.5, 0.7});
+    Data fk(m), r(m), ab(m);
+    std::mt19937_64 rng(57);
+    const RandomState s = se3_test::random_state(m, rng);
+    forward_kinematics(m, fk, s.base, s.q, s.v);
+    const VecX a = aba(m, ab, s.base, s.q, s.v, s.u);
+    rnea(m, r, s.base, s.q, s.v, a);
+    for (int i = 0; i <= m.n; ++i) {
+      EXPECT_LE((r.V[i] - fk.V[i]).cwiseAbs().maxCoeff(), 1e-14) << i;
+      EXPECT_LE((ab.V[i] - fk.V[i]).cwiseAbs().maxCoeff(), 1e-14) << i;
+      EXPECT_LE((r.A[i] - ab.A[i]).cwiseAbs().maxCoeff(), 1e-11 * (1 + ab.A[i].norm())) << i;
+    }
+    EXPECT_GT(fk.V[m.n].norm(), 0.1);
+    EXPECT_GT(ab.A[m.n].norm(), 0.1);
+    EXPECT_EQ(r.M.size(), 0);  // no mass matrix until crba is called
+    crba(m, r, s.base, s.q);
+    EXPECT_EQ(r.M.rows(), m.nv);
+  }
+}
+
+// crba's paired row kernel against its scalar reference: identical bits for every segment start
+// and length (odd and even, so the paired loop and its tail both run) and both output strides.
+TEST(Dynamics, PairedRowKernelEqualsItsScalarReference) {
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> u(-1, 1);
+  constexpr int n = 41;
+  std::vector<double> rows[6];
+  for (auto& r : rows) {
+    r.resize(n);
+    for (double& x : r) x = u(rng);
+  }
+  const double* const J[6] = {rows[0].data(), rows[1].data(), rows[2].data(),
+                              rows[3].data(), rows[4].data(), rows[5].data()};
+  long compared = 0;
+  for (int c0 = 0; c0 < n; ++c0) {
+    for (int c1 = c0; c1 <= n; ++c1) {
+      const double F[6] = {u(rng), u(rng), u(rng), u(rng), u(rng), u(rng)};
+      for (std::ptrdiff_t stride : {1, n}) {
+        std::vector<double> up(n, 0.0), left(n * n, 0.0), up_ref(up), left_ref(left);
+        detail::row_segment(F, J, c0, c1, up.data(), left.data(), stride);
+        detail::row_segment_reference(F, J, c0, c1, up_ref.data(), left_ref.data(), stride);
+        ASSERT_EQ(0, std::memcmp(up.data(), up_ref.data(), n * sizeof(double))) << c0 << " " << c1;
+        ASSERT_EQ(0, std::memcmp(left.data(), left_ref.data(), n * n * sizeof(double)))
+            << c0 << " " << c1;
+        compared += c1 - c0;
+      }
+    }
+  }
+  EXPECT_GT(compared, 20000);
 }
 
 int main(int argc, char** argv) {

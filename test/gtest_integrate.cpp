@@ -46,13 +46,7 @@ Model free_body(const Vec3& principal) {
   Model m;
   m.name = "body";
   m.floating = true;
-  m.parent = {-1};
-  m.X_tree = {SE3()};
-  m.joint_type = {JointType::Revolute};
-  m.inertia = {Inertia::from_com(2.0, Vec3::Zero(), principal.asDiagonal())};
-  m.body_name = {"body"};
-  m.joint_name = {""};
-  m.lower = m.upper = m.effort = m.velocity = m.damping = m.friction = {0.0};
+  m.start_with_base("body", Inertia::from_com(2.0, Vec3::Zero(), principal.asDiagonal()));
   m.links.push_back({"body", 0, SE3()});
   m.gravity.setZero();
   m.finalize();
@@ -63,12 +57,34 @@ Model free_body(const Vec3& principal) {
 }  // namespace
 
 TEST(Stepper, RegistryKnowsTheBuiltInsAndRejectsUnknownNames) {
+  // Every built-in is in the one registry without any registration call by the program.
   const auto names = stepper_names();
-  for (const char* n : {"euler", "symplectic_euler", "rkmk4", "rkmk45"}) {
+  const Model m = make_chain(2, true);
+  for (const char* n : {"euler", "semi_implicit_euler", "rkmk4", "rkmk45", "variational",
+                        "rk4_euler_angles", "rk4_quaternion"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
     EXPECT_FALSE(stepper_description(n).empty());
+    EXPECT_EQ(stepper_canonical_name(n), n);
+    EXPECT_EQ(make_stepper(n, m)->name(), n);
   }
-  const Model m = make_chain(2, true);
+  // symplectic_euler, the former name, is an alias: accepted, listed as an alias, and the
+  // stepper it makes is semi_implicit_euler.
+  EXPECT_NE(std::find(names.begin(), names.end(), "symplectic_euler"), names.end());
+  EXPECT_EQ(stepper_canonical_name("symplectic_euler"), "semi_implicit_euler");
+  EXPECT_EQ(stepper_description("symplectic_euler"), "alias of semi_implicit_euler");
+  EXPECT_EQ(make_stepper("symplectic_euler", m)->name(), "semi_implicit_euler");
+  EXPECT_EQ(stepper_canonical_name("nope"), "");
+  const std::string help = stepper_help();
+  std::printf("%s", help.c_str());
+  EXPECT_NE(help.find("  semi_implicit_euler "), std::string::npos);
+  EXPECT_NE(help.find("[alias: symplectic_euler]"), std::string::npos);
+  EXPECT_EQ(help.find("  symplectic_euler "), std::string::npos);  // not a line of its own
+  for (const auto& n : names) {
+    if (stepper_canonical_name(n) == n) {
+      EXPECT_NE(help.find("  " + n + " "), std::string::npos);
+    }
+  }
+  EXPECT_THROW(register_stepper_alias("x", "nope"), std::invalid_argument);
   EXPECT_THROW(make_stepper("rk_nonsense", m), std::invalid_argument);
   EXPECT_EQ(make_stepper("rkmk45", m)->adaptive(), true);
   EXPECT_EQ(make_stepper("rkmk4", m)->order(), 4);
@@ -143,7 +159,7 @@ TEST(FreeBody, FollowsEulersEquationsTorqueFree) {
     double h, tol;
   };
   for (const Case& c : {Case{"rkmk4", 1e-3, 1e-9}, Case{"rkmk45", 1e-2, 1e-8},
-                        Case{"symplectic_euler", 1e-4, 3e-2}}) {
+                        Case{"semi_implicit_euler", 1e-4, 3e-2}}) {
     StepperOptions opt;
     opt.tol = 1e-11;
     const State x = run(m, c.name, x0, c.h, T, nullptr, opt);
@@ -212,7 +228,7 @@ TEST(Convergence, Rkmk4IsFourthOrderAndSymplecticEulerFirstOrder) {
   EXPECT_GT(e1, 1e-9);  // well above the reference's own error
   EXPECT_NEAR(e1 / e2, 16.0, 3.0) << e1 << " " << e2;
   EXPECT_NEAR(e2 / e3, 16.0, 2.0) << e2 << " " << e3;
-  for (const char* first : {"symplectic_euler", "euler"}) {
+  for (const char* first : {"semi_implicit_euler", "euler"}) {
     const double s1 = global_error(m, x0, first, 1.0 / 400, T, ref);
     const double s2 = global_error(m, x0, first, 1.0 / 800, T, ref);
     const double s3 = global_error(m, x0, first, 1.0 / 1600, T, ref);
@@ -275,6 +291,32 @@ TEST(Rkmk4, StepEqualsRkmk4WrittenOutStageByStage) {
     if (floating) {
       EXPECT_GT(xi1.norm(), 1e-3);
     }
+  }
+}
+
+// Classical RK4 runs through its one-pass fast path (step_chain) by default and through the
+// general tableau path on request: both read the same tableau, and give the same steps to
+// rounding (fixed and free base, gravity, damping and friction, commands).
+TEST(Rkmk4, FastPathAndGeneralPathRunTheSameTableau) {
+  for (const bool floating : {false, true}) {
+    Model m = make_chain(6, floating, {2.0, 1.0, 0.5});
+    for (int i = 1; i <= m.n; ++i) {
+      m.damping[i] = 0.1 * i;
+      m.friction[i] = i % 2 ? 0.05 : 0.0;
+    }
+    State fast = random_state(m, 12), general = fast;
+    VecX tau = VecX::Zero(m.nv);
+    for (int k = 0; k < m.nv; ++k) tau[k] = 0.2 * std::cos(k + 1.0);
+    ButcherTableau t = tableau_rk4();
+    auto a = make_rkmk_stepper(t, m, {});
+    t.fast_path = false;
+    auto b = make_rkmk_stepper(t, m, {});
+    for (int k = 0; k < 200; ++k) {
+      ASSERT_TRUE(a->step(fast, tau, 0.005).ok);
+      ASSERT_TRUE(b->step(general, tau, 0.005).ok);
+    }
+    EXPECT_GT(state_err(fast, random_state(m, 12)), 0.1);  // it moved
+    EXPECT_LE(state_err(fast, general), 1e-13) << floating;
   }
 }
 
@@ -515,7 +557,7 @@ TEST(Passive, ForcesActOnTheDampedAndRubbingJointsOnly) {
   for (int k = 0; k < m.nv; ++k) tau[k] = 0.1 * (k + 1);
   StepperOptions opt;
   opt.friction_eps = 0.05;
-  auto st = make_stepper("symplectic_euler", m, opt);
+  auto st = make_stepper("semi_implicit_euler", m, opt);
   VecX expected = VecX::Zero(m.nv);
   for (int i = 1; i <= m.n; ++i) {
     const double qd = x.v[5 + i];
@@ -535,7 +577,7 @@ TEST(Passive, ForcesActOnTheDampedAndRubbingJointsOnly) {
   EXPECT_LE((st->acceleration(x.base, x.q, x.v, tau) - a_ref).cwiseAbs().maxCoeff(), 1e-12);
   // Switched off: no passive force, the plain ABA acceleration.
   opt.passive_forces = false;
-  auto off = make_stepper("symplectic_euler", m, opt);
+  auto off = make_stepper("semi_implicit_euler", m, opt);
   off->passive_forces(x.v, passive);
   EXPECT_EQ(passive.norm(), 0.0);
   EXPECT_EQ(off->acceleration(x.base, x.q, x.v, tau), aba(m, d, x.base, x.q, x.v, tau));

@@ -25,6 +25,8 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/lie.h", "lie"},
     {"lie/simd.h", "lie"},
     {"se3_sim/model.h", "model"},
+    {"se3_sim/limits.h", "model"},
+    {"se3_sim/geometry.h", "geometry"},
     {"se3_sim/dynamics.h", "dynamics"},
     {"se3_sim/constraints.h", "dynamics"},
     {"se3_sim/integrate.h", "integrate"},
@@ -38,18 +40,21 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},
     {"se3_sim/ros/teleop_node.h", "ros"},
+    {"se3_sim/ros/renderer_convert.h", "ros"},
 };
 
 // What each layer may include: itself and the layers below it.
 const std::map<std::string, std::set<std::string>> kAllowed = {
     {"lie", {"lie"}},
     {"model", {"lie", "model"}},
-    {"dynamics", {"lie", "model", "dynamics"}},
-    {"integrate", {"lie", "model", "dynamics", "integrate"}},
-    {"render", {"lie", "model", "dynamics", "render"}},
+    {"geometry", {"lie", "model", "geometry"}},
+    {"dynamics", {"lie", "model", "geometry", "dynamics"}},
+    {"integrate", {"lie", "model", "geometry", "dynamics", "integrate"}},
+    {"render", {"lie", "model", "geometry", "dynamics", "render"}},
     {"teleop", {"lie", "model", "teleop"}},
-    {"sim", {"lie", "model", "dynamics", "integrate", "sim"}},
-    {"ros", {"lie", "model", "dynamics", "integrate", "sim", "render", "teleop", "ros"}},
+    {"sim", {"lie", "model", "geometry", "dynamics", "integrate", "sim"}},
+    {"ros",
+     {"lie", "model", "geometry", "dynamics", "integrate", "sim", "render", "teleop", "ros"}},
 };
 
 // The files of a layer: its public headers and src/<layer>/.

@@ -197,7 +197,7 @@ TEST(Model, LinkFramesAndInertiasMatchTheUrdf) {
         if (j->dynamics) {
           EXPECT_EQ(m.damping[i], j->dynamics->damping);
         }
-        EXPECT_EQ(m.joint_type[i] == JointType::Prismatic, j->type == urdf::Joint::PRISMATIC);
+        EXPECT_EQ(m.joints[i].type == JointType::Prismatic, j->type == urdf::Joint::PRISMATIC);
       }
     }
   }
@@ -272,8 +272,9 @@ TEST(Model, Errors) {
                 "<inertial><mass value='-1'/><inertia ixx='0.1' iyy='0.1' izz='0.1' ixy='0' "
                 "ixz='0' iyz='0'/></inertial>"),
       {"'b'"});
-  // Unsupported joint types.
-  expect_model_error(two_links("floating", "0 0 1", kInertial), {"'j1'", "floating"});
+  // Unsupported joint types (a floating joint from the root is the free base, if the root is
+  // empty: here it carries an inertial).
+  expect_model_error(two_links("floating", "0 0 1", kInertial), {"'j1'", "floating", "'base'"});
   expect_model_error(two_links("planar", "0 0 1", kInertial), {"'j1'", "planar"});
   // A zero axis.
   expect_model_error(two_links("revolute", "0 0 0", kInertial), {"'j1'", "axis"});
@@ -324,7 +325,7 @@ TEST(Model, FixedJointsMergeLinks) {
   ASSERT_EQ(m.n, 2);
   EXPECT_EQ(m.joint_name[1], "j1");
   EXPECT_EQ(m.joint_name[2], "j2");
-  EXPECT_EQ(m.joint_type[2], JointType::Prismatic);
+  EXPECT_EQ(m.joints[2].type, JointType::Prismatic);
   EXPECT_EQ(m.parent[2], 1);
   EXPECT_EQ(m.body_name[1], "l1");
   ASSERT_EQ(m.links.size(), 5u);
@@ -450,6 +451,122 @@ TEST(Model, GeneratedChains) {
   for (int i = 0; i <= 7; ++i) EXPECT_EQ(m.inertia[i].m, masses[i % 3]);
   // Links of length 0.5: every joint sits 0.5 from its parent's origin.
   for (int i = 1; i <= 7; ++i) EXPECT_NEAR(m.X_tree[i].p.norm(), 0.5, 1e-15);
+}
+
+// The joint model: coordinates, motion subspace and transform of each joint type, and the
+// coordinate layout finalize() gives a model.
+TEST(Joint, ModelCoordinatesSubspaceAndTransform) {
+  const JointModel rev(JointType::Revolute), pri(JointType::Prismatic);
+  const JointModel free(JointType::Free), fixed(JointType::Fixed);
+  EXPECT_EQ(rev.nq, 1);
+  EXPECT_EQ(rev.nv, 1);
+  EXPECT_EQ(rev.axis(), 2);
+  EXPECT_EQ(pri.nq, 1);
+  EXPECT_EQ(pri.nv, 1);
+  EXPECT_EQ(pri.axis(), 5);
+  EXPECT_EQ(free.nq, 0);
+  EXPECT_EQ(free.nv, 6);
+  EXPECT_EQ(free.axis(), -1);
+  EXPECT_EQ(fixed.nq, 0);
+  EXPECT_EQ(fixed.nv, 0);
+  EXPECT_EQ(fixed.axis(), -1);
+  EXPECT_EQ(rev.motion_subspace(), Vec6::Unit(2));
+  EXPECT_EQ(pri.motion_subspace(), Vec6::Unit(5));
+  EXPECT_EQ(free.motion_subspace(), Mat6::Identity());
+  EXPECT_EQ(fixed.motion_subspace().cols(), 0);
+  EXPECT_STREQ(rev.urdf_type(true), "revolute");
+  EXPECT_STREQ(rev.urdf_type(false), "continuous");
+  EXPECT_STREQ(pri.urdf_type(true), "prismatic");
+  EXPECT_EQ(free.urdf_type(true), nullptr);
+  // X_tree exp(S q), S q the joint's twist: against the group exponential.
+  const SE3 Xt(exp_so3(Vec3(0.3, -0.2, 0.7)), Vec3(0.1, 0.2, -0.3));
+  const double q = 0.83;
+  EXPECT_TRUE(rev.transform(Xt, &q).isApprox(Xt * exp_se3(q * Vec6::Unit(2)), 1e-15));
+  EXPECT_TRUE(pri.transform(Xt, &q).isApprox(Xt * exp_se3(q * Vec6::Unit(5)), 1e-15));
+  EXPECT_TRUE(free.transform(Xt, nullptr).isApprox(Xt, 0));
+  // The dynamics' joint transforms are the joint model's.
+  for (bool floating : {false, true}) {
+    Model m = make_chain(4, floating);
+    m.joints[2] = JointModel(JointType::Prismatic);
+    m.finalize();
+    m.validate();
+    EXPECT_EQ(m.joints[0].type, floating ? JointType::Free : JointType::Fixed);
+    EXPECT_EQ(m.nq, 4);
+    EXPECT_EQ(m.nv, floating ? 10 : 4);
+    EXPECT_EQ(m.nv_base(), floating ? 6 : 0);
+    for (int i = 1; i <= 4; ++i) {
+      EXPECT_EQ(m.idx_q(i), i - 1);
+      EXPECT_EQ(m.idx_v(i), m.nv_base() + i - 1);
+    }
+    Data d(m);
+    VecX qs(4);
+    qs << 0.4, -1.1, 0.25, 2.0;
+    forward_kinematics(m, d, SE3(), qs);
+    for (int i = 1; i <= 4; ++i) {
+      EXPECT_TRUE(d.Xup[i].isApprox(m.joints[i].transform(m.X_tree[i], &qs[m.idx_q(i)]), 1e-15))
+          << i;
+    }
+  }
+  // Bodies 1..n take one-dof joints only, and the coordinates must come from finalize().
+  Model bad = make_chain(2, false);
+  bad.joints[1] = JointModel(JointType::Free);
+  bad.finalize();
+  EXPECT_THROW(bad.validate(), ModelError);
+  Model stale = make_chain(2, true);
+  stale.floating = false;  // not finalized since
+  EXPECT_THROW(stale.validate(), ModelError);
+}
+
+// URDF floating joints. From the root link (the world) to the base: that base is free, with the
+// joint's origin as its rest pose, and the model is the same as the URDF without the world link
+// loaded with --floating. Anywhere else, and planar joints: a one-line error naming the joint.
+TEST(Joint, UrdfFloatingJointFromTheWorldIsTheFreeBase) {
+  const std::string robot =
+      std::string("<link name='base'>") + kInertial + "</link><link name='b'>" + kInertial +
+      "</link><joint name='j1' type='revolute'><parent link='base'/><child link='b'/>"
+      "<origin xyz='0.2 0 0'/><axis xyz='0 1 0'/>"
+      "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>";
+  const std::string world_joint =
+      "<link name='world'/><joint name='root_float' type='floating'><parent link='world'/>"
+      "<child link='base'/><origin xyz='0.5 -1 2' rpy='0.1 0.2 0.3'/></joint>";
+  const std::string with_world = "<robot name='t'>" + world_joint + robot + "</robot>";
+  const Model m = model_from_urdf_string(with_world);  // no --floating needed
+  EXPECT_TRUE(m.floating);
+  EXPECT_EQ(m.root_link, "base");
+  EXPECT_EQ(m.body_name[0], "base");
+  EXPECT_EQ(m.links[0].name, "base");
+  EXPECT_EQ(m.link_index("world"), -1);
+  EXPECT_EQ(m.n, 1);
+  EXPECT_EQ(m.nv, 7);
+  const SE3 rest(exp_so3(Vec3(0, 0, 0.3)) * exp_so3(Vec3(0, 0.2, 0)) * exp_so3(Vec3(0.1, 0, 0)),
+                 Vec3(0.5, -1, 2));
+  EXPECT_TRUE(m.X_tree[0].isApprox(rest, 1e-12));
+  EXPECT_TRUE(State(m).base.isApprox(m.X_tree[0], 0));
+  UrdfOptions free;
+  free.floating = true;
+  const Model ref = model_from_urdf_string("<robot name='t'>" + robot + "</robot>", free);
+  EXPECT_TRUE(model_from_urdf_string(with_world, free).X_tree[0].isApprox(m.X_tree[0], 0));
+  Data d(m), dr(ref);
+  VecX q(1);
+  q << 0.4;
+  EXPECT_EQ(crba(m, d, rest, q), crba(ref, dr, rest, q));
+  // The world may hold nothing but the floating joint.
+  expect_model_error("<robot name='t'><link name='world'>" + std::string(kInertial) + "</link>" +
+                         world_joint.substr(world_joint.find("<joint")) + robot + "</robot>",
+                     {"'root_float'", "'world'", "inertial"});
+  expect_model_error("<robot name='t'>" + world_joint + robot +
+                         "<link name='table'/><joint name='bolt' type='fixed'><parent "
+                         "link='world'/><child link='table'/></joint></robot>",
+                     {"'root_float'", "'bolt'"});
+  // A floating joint inside the tree, and a planar one, are refused by name.
+  expect_model_error("<robot name='t'>" + robot + "<link name='c'>" + kInertial +
+                         "</link><joint name='loose' type='floating'><parent link='b'/>"
+                         "<child link='c'/></joint></robot>",
+                     {"'loose'", "floating", "root link", "'b'"});
+  expect_model_error("<robot name='t'>" + robot + "<link name='c'>" + kInertial +
+                         "</link><joint name='slider' type='planar'><parent link='b'/>"
+                         "<child link='c'/><axis xyz='0 0 1'/></joint></robot>",
+                     {"'slider'", "planar"});
 }
 
 int main(int argc, char** argv) {

@@ -2,6 +2,7 @@
 // refused with the line), the headless run behind `se3_dyn simulate`, the URDF writer for
 // generated robots, and the Simulator's commands and reset.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "../src/sim/scene_reader.h"
 #include "se3_sim/sim.h"
 #include "test_util.h"
 
@@ -91,14 +93,14 @@ TEST(Scene, FixedPandaIsTheSevenDofArmOnAFixedBaseUnderGravity) {
   const Scene s = load_scene(kScenes + "fixed_panda.yaml");
   EXPECT_FALSE(s.floating);
   EXPECT_EQ(s.gravity, Vec3(0, 0, -9.81));
-  EXPECT_EQ(s.integrator, "symplectic_euler");
+  EXPECT_EQ(s.integrator, "semi_implicit_euler");
   EXPECT_EQ(s.dt, 1e-3);
   auto sim = make_simulator(s);
   const Model& m = sim->model();
   EXPECT_EQ(m.n, 7);
   EXPECT_EQ(m.nv, 7);
   EXPECT_EQ(m.joint_index("panda_finger_joint1"), -1);
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
   // Released from rest, it falls: kinetic energy grows from zero, potential energy drops.
   EXPECT_EQ(sim->kinetic_energy(), 0.0);
   ASSERT_EQ(sim->step_n(100), 100) << sim->failure();
@@ -117,7 +119,6 @@ TEST(Scene, RelativeRobotPathsResolveAgainstTheSceneOrThePackage) {
 }
 
 TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
-  EXPECT_NE(scene_error("base: free\n").find("needs 'robot"), std::string::npos);
   EXPECT_NE(scene_error("robot: chain:2\nbsae: free\n").find("test.yaml:2: unknown key 'bsae'"),
             std::string::npos)
       << scene_error("robot: chain:2\nbsae: free\n");
@@ -133,10 +134,39 @@ TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
   EXPECT_NE(scene_error("robot: chain:2\nbase_pose:\n  orientation: [0, 0, 0, 2]\n")
                 .find("unit quaternion"),
             std::string::npos);
-  EXPECT_NE(scene_error("robot: chain:2\ngravity: [0, 0,\n").find("unterminated"),
+  // YAML errors (yaml-cpp's words) with the line.
+  EXPECT_NE(scene_error("robot: chain:2\ngravity: [0, 0,\n").find("test.yaml:3: end of sequence"),
+            std::string::npos)
+      << scene_error("robot: chain:2\ngravity: [0, 0,\n");
+  EXPECT_NE(scene_error("robot: chain:2\n\tdt: 1\n").find("test.yaml:2: illegal tab"),
+            std::string::npos)
+      << scene_error("robot: chain:2\n\tdt: 1\n");
+  EXPECT_NE(scene_error("robot: chain:2\ndt: 1\ndt: 2\n").find("test.yaml:3: duplicate key 'dt'"),
             std::string::npos);
-  EXPECT_NE(scene_error("robot: chain:2\n\tdt: 1\n").find("tabs"), std::string::npos);
-  EXPECT_NE(scene_error("robot: chain:2\ndt: 1\ndt: 2\n").find("duplicate key 'dt'"),
+  EXPECT_NE(scene_error("robot: chain:2\nbase_pose: {position: [0, 0, 1], position: [1, 1, 1]}\n")
+                .find("duplicate key 'position' in 'base_pose'"),
+            std::string::npos);
+  EXPECT_NE(scene_error("- robot: chain:2\n").find("the top level of a scene must be a map"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\n---\ndt: 1\n").find("one YAML document"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ndt: *nothing\n").find("test.yaml:2:"), std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\n? [a, b]\n: 1\n").find("is not a name"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ndt: [1]\n").find("test.yaml:2: 'dt' needs a number"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\ndt:\ngravity: [0, 0, 0]\n").find("test.yaml:2: 'dt'"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\njoint_limits: maybe\n").find("needs true or false"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nbase_pose:\n  position: [0, 0, .inf]\n")
+                .find("test.yaml:3: 'base_pose.position[2]' needs a finite number, got '.inf'"),
+            std::string::npos);
+  EXPECT_NE(scene_error("robot: chain:2\nconstraints:\n  c: {type: hinge, link_a: base}\n")
+                .find("test.yaml:3: 'constraints.c.type' is point_world"),
+            std::string::npos)
+      << scene_error("robot: chain:2\nconstraints:\n  c: {type: hinge, link_a: base}\n");
+  EXPECT_NE(scene_error("robot: chain:2\nground: {mu: -1}\n").find("'ground.mu' must be >= 0"),
             std::string::npos);
   EXPECT_NE(scene_error("robot: chain:2\nbase_inertia: {mass: 1, inertia: [1, 1, 5]}\n")
                 .find("not a physical inertia"),
@@ -151,13 +181,81 @@ TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
             std::string::npos);
   EXPECT_NE(scene_error("robot: chain:2\nbase_visual: {box: [1, 1, 1], size: 2}\n").find("size"),
             std::string::npos);
-  // A joint the model does not have.
-  const Scene s = parse_scene("robot: chain:2\ninitial_positions: {j9: 1}\n", kScenes);
+  // A joint the model does not have: the error names the scene and the joint.
+  const Scene s = parse_scene("robot: chain:2\ninitial_positions: {j9: 1}\n", kScenes, "t.yaml");
   const Model m = scene_model(s);
-  EXPECT_THROW(scene_state(s, m), SceneError);
+  try {
+    scene_state(s, m);
+    ADD_FAILURE() << "no error for joint j9";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.yaml: initial_positions names joint 'j9'"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
-TEST(Scene, YamlSubsetParsesNestingFlowAndComments) {
+// A scene keeps robot: optional (the robot may come from outside: robot_description or
+// `simulate MODEL --scene`); scenes name joints only where they mean them; a joint the robot
+// lacks is an error naming the scene and the joint, and a scene without joints fits any robot.
+TEST(Scene, TheRobotMayComeFromOutsideAndAJointlessSceneFitsAnyRobot) {
+  const Scene s =
+      parse_scene("name: generic\nbase: fixed\ngravity: [0, 0, -9.81]\n", kScenes, "generic.yaml");
+  EXPECT_TRUE(s.robot.empty());
+  EXPECT_TRUE(s.robot_path.empty());
+  EXPECT_TRUE(s.base_given);
+  EXPECT_EQ(scene_error("name: nothing\n"), "");  // parses
+  try {
+    scene_model(s);
+    ADD_FAILURE() << "a scene without a robot built a model";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("generic.yaml: no robot"), std::string::npos) << e.what();
+  }
+  int robots = 0;
+  for (const auto& r : se3_test::robot_files()) {
+    SCOPED_TRACE(r.file);
+    std::ifstream in(se3_test::robot_path(r.file));
+    std::stringstream xml;
+    xml << in.rdbuf();
+    const Model m = scene_model(s, xml.str());
+    EXPECT_FALSE(m.floating);
+    const State x = scene_state(s, m);
+    EXPECT_EQ(x.q.size(), m.n);
+    EXPECT_EQ(x.q.norm(), 0.0);
+    ++robots;
+  }
+  EXPECT_GE(robots, 5);
+  // A scene's joint the robot lacks, in each key that names joints: the scene and the joint.
+  const std::string ur5 = kSource + "/data/robots/ur5_robot.urdf";
+  std::ifstream in(ur5);
+  std::stringstream xml;
+  xml << in.rdbuf();
+  for (const char* key : {"initial_positions", "initial_velocities", "locked_joints"}) {
+    SCOPED_TRACE(key);
+    const Scene t =
+        parse_scene(std::string(key) + ": {panda_joint1: 0.1}\n", kScenes, "panda_only.yaml");
+    try {
+      const Model m = scene_model(t, xml.str());
+      scene_state(t, m);
+      ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("panda_only.yaml: "), std::string::npos) << w;
+      EXPECT_NE(w.find(std::string(key) + " names joint 'panda_joint1'"), std::string::npos) << w;
+    }
+  }
+  // The headless run takes the robot from the command line and the rest from the scene.
+  SimulateOptions o;
+  o.scene = ::testing::TempDir() + "se3_generic_" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(o.scene) << "base: fixed\ngravity: [0, 0, 0]\ndt: 0.002\n";
+  o.model = ur5;
+  o.duration = 0.01;
+  const SimulateResult r = simulate_headless(o);
+  EXPECT_EQ(r.steps, 5u);
+  EXPECT_EQ(r.dt, 0.002);
+  std::remove(o.scene.c_str());
+}
+
+TEST(Scene, YamlParsesNestingFlowAndComments) {
   const Scene s = parse_scene(
       "# comment\n"
       "name: 'my scene # not a comment'\n"
@@ -192,6 +290,78 @@ TEST(Scene, YamlSubsetParsesNestingFlowAndComments) {
   EXPECT_EQ(x.v[2], 1.0);
 }
 
+// Scenes are standard YAML (yaml-cpp): block lists of maps, anchors and aliases, quoting,
+// comments, and the typed reader with the line of every value (what objects: and controllers:
+// build on).
+TEST(Scene, StandardYamlBlockListsAnchorsQuotingComments) {
+  const std::string text =
+      "# a scene of the future\n"
+      "defaults: &box {mass: 2.0, size: [0.1, 0.2, 0.3]}\n"
+      "objects:\n"
+      "  - name: \"first # not a comment\"\n"
+      "    shape: *box\n"
+      "  - name: 'it''s second'\n"
+      "    shape:\n"
+      "      mass: 1e-1   # a comment\n"
+      "      size: [1, 2, 3]\n"
+      "flag: yes\n";
+  const SceneReader r("future.yaml");
+  const SceneReader::Field root = r.document(text);
+  const auto top = r.fields(root, {"defaults", "objects", "flag"});
+  ASSERT_EQ(top.size(), 3u);
+  EXPECT_EQ(top[1].key, "objects");
+  EXPECT_EQ(top[1].line, 4);
+  const auto objects = r.items(top[1]);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(objects[1].key, "objects[1]");
+  EXPECT_EQ(objects[1].line, 6);
+  const auto first = r.fields(objects[0], {"name", "shape"});
+  EXPECT_EQ(r.text(first[0]), "first # not a comment");
+  const auto shape = r.fields(first[1], {"mass", "size"});
+  EXPECT_EQ(r.positive(shape[0]), 2.0);  // through the alias
+  EXPECT_EQ(r.vec3(shape[1]), Vec3(0.1, 0.2, 0.3));
+  const auto second = r.fields(objects[1], {"name", "shape"});
+  EXPECT_EQ(r.text(second[0]), "it's second");
+  const auto shape2 = r.fields(second[1]);
+  EXPECT_EQ(shape2[0].key, "objects[1].shape.mass");
+  EXPECT_EQ(shape2[0].line, 8);
+  EXPECT_EQ(r.number(shape2[0]), 0.1);
+  EXPECT_TRUE(r.boolean(top[2]));
+  // Errors name the file, the line and the whole key.
+  try {
+    r.fields(second[1], {"mass"});
+    ADD_FAILURE() << "no error for an unknown key";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("future.yaml:9: unknown key 'size' in objects[1].shape"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    r.integer(shape2[0], 0, 10);
+    ADD_FAILURE() << "no error for 0.1 as a whole number";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("future.yaml:8: 'objects[1].shape.mass' needs a whole"),
+              std::string::npos)
+        << e.what();
+  }
+  // A scene key in block style where flow style was the only way before.
+  const Scene s = parse_scene(
+      "robot: chain:3\n"
+      "base_pose:\n"
+      "  position:\n"
+      "    - 0.0\n"
+      "    - 0.0\n"
+      "    - 2.0\n"
+      "initial_positions: &q\n"
+      "  j1: 0.5\n"
+      "initial_velocities: *q\n"
+      "name: \"quoted: yes\"\n",
+      kScenes);
+  EXPECT_EQ(s.base_pose.p, Vec3(0, 0, 2));
+  EXPECT_EQ(s.initial_velocities, s.initial_positions);
+  EXPECT_EQ(s.name, "quoted: yes");
+}
+
 TEST(Headless, SatelliteSceneConservesEnergyAndMomentum) {
   SimulateOptions o;
   o.scene = kScenes + "satellite_arm.yaml";
@@ -223,7 +393,7 @@ TEST(Headless, RandomStatesAreReproducibleAndIntegratorsRankByAccuracy) {
   o.duration = 1.0;
   o.dt = 1e-3;
   double drift[3];
-  const char* names[3] = {"euler", "symplectic_euler", "rkmk4"};
+  const char* names[3] = {"euler", "semi_implicit_euler", "rkmk4"};
   for (int k = 0; k < 3; ++k) {
     o.integrator = names[k];
     const SimulateResult a = simulate_headless(o);
@@ -320,7 +490,7 @@ TEST(Guard, KineticEnergyBoundIsNeverBelowTheEnergy) {
       se3_test::RandomState s = se3_test::random_state(m, rng);
       if (k % 4 == 1) {
         for (int i = 1; i <= m.n; ++i) {
-          if (m.joint_type[i] == JointType::Prismatic) s.q[i - 1] = se3_test::uniform(rng, -2, 2);
+          if (m.joints[i].type == JointType::Prismatic) s.q[i - 1] = se3_test::uniform(rng, -2, 2);
         }
       }
       check(s, k % 4 == 2 ? VecX(1e3 * s.v) : s.v);
@@ -375,12 +545,13 @@ TEST(Simulator, ResetStepAndCommands) {
   sim->link_poses(poses);
   ASSERT_EQ(poses.size(), m.links.size());
   EXPECT_TRUE(poses[0].isApprox(s.base_pose * m.links[0].offset, 1e-12));
-  // A different integrator keeps the state.
+  // A different integrator keeps the state; the former name symplectic_euler is an alias of
+  // semi_implicit_euler.
   sim->set_integrator("symplectic_euler");
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
   EXPECT_EQ(sim->state().v, moving.v);
   EXPECT_THROW(sim->set_integrator("nope"), std::invalid_argument);
-  EXPECT_EQ(sim->integrator(), "symplectic_euler");
+  EXPECT_EQ(sim->integrator(), "semi_implicit_euler");
 }
 
 int main(int argc, char** argv) {

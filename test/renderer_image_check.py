@@ -3,8 +3,10 @@
 
 Checks the size (1280x1024) and encoding (rgb8), that pixels where a link must be differ from the
 frame drawn before the robot had a pose, that pixels away from the robot do not, and that the
-horizon lies on the row the camera geometry gives. The image is read as raw bytes (rospy.AnyMsg),
-so no Python sensor_msgs package is needed.
+horizon lies on the row the camera geometry gives; camera_info; the RViz markers naming the
+Panda's meshes; save_frame writing a new file each time; and a second renderer (namespace
+follow) whose camera follows panda_link0, rendering only while someone subscribes. Images and
+markers are read as raw bytes (rospy.AnyMsg).
 """
 import math
 import sys
@@ -12,9 +14,13 @@ import time
 import unittest
 import xml.etree.ElementTree as ET
 
+import os
+
 import rospy
 import rostest
 from geometry_msgs.msg import TransformStamped
+from sensor_msgs.msg import CameraInfo
+from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from image_check_util import H, W, Camera, parse_image, px
@@ -52,7 +58,7 @@ class RendererImageTest(unittest.TestCase):
             time.sleep(0.05)
         self.fail("no image on renderer/image")
 
-    def publish_panda_tf(self):
+    def publish_panda_tf(self, base=(0.0, 0.0, 0.0)):
         xml = rospy.get_param("robot_description")
         root = ET.fromstring(xml)
         msgs = []
@@ -69,7 +75,7 @@ class RendererImageTest(unittest.TestCase):
              t.transform.rotation.w) = q
             msgs.append(t)
 
-        add("world", "panda_link0", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        add("world", "panda_link0", base, (0.0, 0.0, 0.0))
         for j in root.findall("joint"):  # every joint at q = 0
             o = j.find("origin")
             xyz = [float(v) for v in (o.get("xyz", "0 0 0") if o is not None else "0 0 0").split()]
@@ -119,6 +125,88 @@ class RendererImageTest(unittest.TestCase):
         hz = (self.count - start) / (time.time() - t0)
         self.assertGreater(hz, 0.5 * 20, "renderer/image at %.1f Hz" % hz)
         self.assertLess(hz, 1.5 * 20, "renderer/image at %.1f Hz" % hz)
+
+
+    def test_camera_info(self):
+        msgs = []
+        sub = rospy.Subscriber("renderer/camera_info", CameraInfo, msgs.append, queue_size=1)
+        end = time.time() + 30
+        while not msgs and time.time() < end:
+            time.sleep(0.1)
+        sub.unregister()
+        self.assertTrue(msgs, "no renderer/camera_info")
+        k = msgs[-1].K
+        self.assertEqual((msgs[-1].width, msgs[-1].height), (W, H))
+        self.assertAlmostEqual(k[0], FOCAL)
+        self.assertAlmostEqual(k[2], W / 2 - 0.5)
+        self.assertAlmostEqual(k[5], H / 2 - 0.5)
+
+    def test_markers_name_the_meshes(self):
+        got = []
+        sub = rospy.Subscriber("renderer/markers", rospy.AnyMsg,
+                               lambda m: got.append(bytes(m._buff)), queue_size=1)
+        end = time.time() + 30
+        while not got and time.time() < end:
+            time.sleep(0.1)
+        sub.unregister()
+        self.assertTrue(got, "no renderer/markers")
+        name = b"package://example-robot-data/robots/panda_description/meshes/visual/link3.dae"
+        self.assertIn(name, got[-1])
+
+    def test_save_frame_writes_a_new_file_each_time(self):
+        rospy.wait_for_service("renderer/save_frame", 30)
+        save = rospy.ServiceProxy("renderer/save_frame", Trigger)
+        a, b = save(), save()
+        self.assertTrue(a.success, a.message)
+        self.assertTrue(b.success, b.message)
+        self.assertNotEqual(a.message, b.message)
+        for r in (a, b):
+            self.assertTrue(os.path.isfile(r.message), r.message)
+            with open(r.message, "rb") as f:
+                self.assertEqual(f.read(4), b"\x89PNG")
+
+    def test_zz_follow_frame(self):
+        """Last (name order): it moves panda_link0."""
+        self.publish_panda_tf()
+        # Nobody subscribes the follow renderer's image: it draws nothing (no camera TF).
+        frames = []
+
+        def on_tf(msg):
+            frames.extend(t.child_frame_id for t in msg.transforms)
+
+        tf_sub = rospy.Subscriber("/tf", TFMessage, on_tf, queue_size=50)
+        time.sleep(2.0)
+        self.assertNotIn("follow_camera", frames)
+        images = []
+        img_sub = rospy.Subscriber("follow/renderer/image", rospy.AnyMsg,
+                                   lambda m: images.append((time.time(), bytes(m._buff))),
+                                   queue_size=1)
+
+        def image_after(t0, timeout=30.0):
+            end = time.time() + timeout
+            while time.time() < end:
+                fresh = [i for i in images if i[0] > t0]
+                if fresh:
+                    return parse_image(fresh[-1][1])[4]
+                time.sleep(0.05)
+            self.fail("no follow/renderer/image")
+
+        time.sleep(1.5)
+        before = image_after(time.time())
+        self.assertIn("follow_camera", frames)
+        main_before = self.wait_image(time.time())[4]
+        probe = [project(p) for p in [(0.0, 0.0, 0.15), (0.0, 0.0, 0.5)]]
+        # The robot falls 1 m and slides: the follow camera keeps it in place, the other not.
+        self.publish_panda_tf((0.6, 0.4, -1.0))
+        time.sleep(1.5)
+        after = image_after(time.time() + 0.3)
+        main_after = self.wait_image(time.time())[4]
+        for u, v in probe:
+            diff = sum(abs(a - b) for a, b in zip(self.px(after, u, v), self.px(before, u, v)))
+            self.assertLessEqual(diff, 6, "follow camera lost the robot at pixel %.0f, %.0f" % (u, v))
+            self.assertNotEqual(self.px(main_after, u, v), self.px(main_before, u, v))
+        img_sub.unregister()
+        tf_sub.unregister()
 
 
 if __name__ == "__main__":

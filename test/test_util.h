@@ -117,8 +117,8 @@ inline RandomState random_state(const se3::Model& m, std::mt19937_64& rng) {
   s.base = random_pose(rng);
   s.q.resize(m.n);
   for (int i = 1; i <= m.n; ++i) {
-    s.q[i - 1] = m.joint_type[i] == se3::JointType::Prismatic ? uniform(rng, -0.05, 0.05)
-                                                              : uniform(rng, -M_PI, M_PI);
+    s.q[i - 1] = m.joints[i].type == se3::JointType::Prismatic ? uniform(rng, -0.05, 0.05)
+                                                               : uniform(rng, -M_PI, M_PI);
   }
   s.v = random_vec(rng, m.nv, 1.0);
   s.u = random_vec(rng, m.nv, 1.0);

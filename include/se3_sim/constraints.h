@@ -50,6 +50,7 @@
 #include <vector>
 
 #include "se3_sim/dynamics.h"
+#include "se3_sim/geometry.h"
 
 namespace se3 {
 
@@ -105,9 +106,11 @@ struct ConstraintSpec {
   double ground_offset = 0;
   double mu = 0.8;  ///< Coulomb friction coefficient
   /// Contact spheres; with contacts_from_collisions also every collision sphere (centre,
-  /// radius), box (8 corners), cylinder (8 points on each rim) of the model; meshes are skipped.
+  /// radius), box (8 corners), cylinder (8 points on each rim), capsule (its two end spheres)
+  /// of `geometry`; meshes are skipped.
   std::vector<ContactPoint> contacts;
   bool contacts_from_collisions = false;
+  std::shared_ptr<const GeometryModel> geometry;  ///< the model's, for contacts_from_collisions
   ConstraintOptions options;
 
   bool empty() const { return bilateral.empty() && !joint_limits && !ground; }

@@ -1,7 +1,7 @@
 // Rigid-body dynamics of the free-floating (or fixed-base) tree, section 6 of Reuss 2002.
 //
 // State: base pose f0 (body 0 in the world; fixed-base models use it as the mount pose),
-// joint positions q (size n) and generalized velocity v (size nv): for a free base
+// joint positions q (size nq) and generalized velocity v (size nv): for a free base
 // v = [V0; qdot] with V0 = [w; v] the base twist in its own frame (eq. 12), else v = qdot.
 // Accelerations are time derivatives of these components (dV0/dt in the base frame).
 //
@@ -19,38 +19,73 @@ using VecX = Eigen::VectorXd;
 using MatX = Eigen::MatrixXd;
 using Mat36 = Eigen::Matrix<double, 3, 6>;
 
-/// The workspace: one per thread, sized once for a model.
+/// The workspace of the algorithms: one per thread, sized for a model by the constructor with
+/// O(n) memory. The mass-matrix workspaces (M and Minv, nv x nv, and their helpers) are sized on
+/// the first crba or minv call, or ahead of it by reserve_crba() / reserve_minv(): a time step that
+/// calls crba or minv reserves in its constructor, so that no step allocates.
+///
+/// Every field says which calls fill it and in which frame ("body": the body's own frame;
+/// "world": the world frame). A field holds what the last call that fills it left; the others
+/// leave it alone. Per-body arrays have n + 1 entries ([0] the base); per-coordinate arrays are
+/// indexed by the joint's idx_q (size nq) or idx_v (size nv; a free base's six entries of the
+/// per-dof arrays are unused).
 struct Data {
   explicit Data(const Model& model);
 
-  std::vector<SE3> Xup;              ///< body i in its parent's frame: X_tree[i] * exp(S_i q_i)
-  std::vector<double> sin_q, cos_q;  ///< sin and cos of every joint position (revolute joints)
-  std::vector<SE3> oMb;              ///< body i in the world
-  std::vector<Vec6> V;               ///< body twists (body frame), eq. (33)
-  std::vector<Vec6> A;  ///< body accelerations (body frame, gravity folded in), eq. (35)
-  std::vector<Vec6> c;  ///< velocity-product accelerations gamma, eq. (34)
-  std::vector<Vec6> F;  ///< body wrenches / bias forces, eq. (36)
-  /// rnea: twist and acceleration of body i interleaved component by component,
-  /// (V_0, A_0, V_1, A_1, ..., V_5, A_5) in VA[2i], VA[2i+1], so both travel through one transform.
-  std::vector<Vec6> VA;
-  std::vector<Mat6> IA;  ///< articulated-body inertias, eq. (38)
-  std::vector<Vec6> U;   ///< IA S
-  std::vector<double> Dinv, u;
-  std::vector<Inertia> Ic;  ///< composite inertias (CRBA)
+  // ---- per body
+  /// Body i in its parent's frame, X_tree[i] exp(S_i q_i): every algorithm (all start with the
+  /// joint transforms); [0] is not written.
+  std::vector<SE3> Xup;
+  /// Body i in the world: forward_kinematics, minv, crba's world-frame evaluation (crba_local
+  /// false), and the energy, momentum and centre-of-mass functions.
+  std::vector<SE3> oMb;
+  /// Body twists (body frame), eq. (33): forward_kinematics with v, body_twists, rnea, aba,
+  /// kinetic_energy, spatial_momentum ([0] the base's twist, zero for a fixed base).
+  std::vector<Vec6> V;
+  /// Body accelerations (body frame) with gravity folded in as the fictitious base acceleration
+  /// [0; -R0^T g] (section 4.3), eq. (35): rnea, aba. Add R_i^T g (world to body) for the true one.
+  std::vector<Vec6> A;
+  /// Velocity-product accelerations gamma_i = V_i x (S_i qd_i) (body frame), eq. (34): aba.
+  std::vector<Vec6> c;
+  /// rnea: the wrench body i's joint transmits, eq. (36) summed over its subtree (body frame),
+  /// [0] the base's (minus f_ext_base); aba: the articulated bias forces pA, eqs. (39)-(41) (body
+  /// frame).
+  std::vector<Vec6> F;
+  /// aba: articulated-body inertias, eq. (38) (body frame; the upper triangle only); minv:
+  /// articulated inertias in the world frame (both triangles).
+  std::vector<Mat6> IA;
+  /// crba: composite inertias of the subtrees, eq. (50) (body frame when crba_local, else world).
+  std::vector<Inertia> Ic;
 
-  VecX tau;             ///< rnea output (nv)
-  VecX ddq;             ///< aba output (nv)
-  VecX nle;             ///< bias H (nv)
-  MatX M;               ///< crba output (nv x nv, both triangles)
-  MatX Minv;            ///< minv output (nv x nv, both triangles)
-  std::vector<Vec6> S;  ///< joint axes in the world frame (crba, minv)
-  /// crba: world-frame joint axes, one row per twist component, so a row of D is six axpys.
+  // ---- per coordinate
+  /// sin and cos of every joint coordinate (nq; read for revolute joints only): every algorithm.
+  std::vector<double> sin_q, cos_q;
+  /// U = IA S of every joint dof (nv): aba (body frame), minv (world frame).
+  std::vector<Vec6> U;
+  /// 1 / (S^T IA S) (nv): aba, minv. u = tau - S^T pA (nv): aba.
+  std::vector<double> Dinv, u;
+  /// The joint axes S_i in the world frame (nv): minv.
+  std::vector<Vec6> S;
+
+  // ---- outputs (nv; the free base's six coordinates first)
+  VecX tau;   ///< rnea
+  VecX ddq;   ///< aba
+  VecX nle;   ///< bias: H
+  MatX M;     ///< crba: the mass matrix (nv x nv, both triangles); empty before the first call
+  MatX Minv;  ///< minv: D^-1 (nv x nv, both triangles); empty before the first call
+
+  // ---- algorithm workspaces (contents unspecified between calls)
+  /// crba (world frame): the joint axes in the world, one row per twist component, so that a row
+  /// of D is six axpys (6 x nv; sized with M).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> Jrow;
   /// minv (eqs. 58-63): world-frame bias wrenches of all columns (subtrees are disjoint column
-  /// ranges, so one 6 x nv block holds them all) and the acceleration blocks of the forward pass.
+  /// ranges, so one 6 x nv block holds them all) and the acceleration blocks of the forward pass;
+  /// crba (local frames): the wrenches Ic S of a subtree's columns. Sized with M or Minv.
   using Mat6X = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>;
   Mat6X Fm;
   std::vector<Mat6X> Pm;
+  /// The block of Pm body i's forward pass writes (a body reuses its parent's when it is the
+  /// parent's last child).
   std::vector<int> P_slot;
   /// First body of the run of consecutive-index ancestors ending at j (crba's row segments).
   std::vector<int> run_start;
@@ -58,10 +93,27 @@ struct Data {
   /// world frame (forward kinematics, world inertias, six multiply-adds per pair): chosen when
   /// the pairs are few, i.e. for shallow trees (set from the model; may be overridden).
   bool crba_local = true;
+
+  /// Sizes M and crba's workspaces (done by crba's first call otherwise).
+  void reserve_crba(const Model& model);
+  /// Sizes Minv and minv's workspaces (done by minv's first call otherwise).
+  void reserve_minv(const Model& model);
+  bool crba_reserved() const { return crba_reserved_; }
+  bool minv_reserved() const { return minv_reserved_; }
+
+ private:
+  bool crba_reserved_ = false;
+  bool minv_reserved_ = false;
 };
 
 /// Positions of every body: Xup and oMb (the product of exponentials, section 5).
 void forward_kinematics(const Model& model, Data& data, const SE3& base, const VecX& q);
+/// Positions and twists: Xup, oMb and V (eq. 33).
+void forward_kinematics(const Model& model, Data& data, const SE3& base, const VecX& q,
+                        const VecX& v);
+/// Body twists V (eq. 33) at generalized velocity v for the joint transforms already in
+/// data.Xup (left by any algorithm's call at the configuration wanted).
+void body_twists(const Model& model, Data& data, const VecX& v);
 
 /// Recursive Newton-Euler, eqs. (33)-(37) (with V_j, not Vdot_j, inside ad* in (36)).
 /// Returns tau (nv): for a free base the first six entries are the base wrench [N; F] (base
@@ -95,14 +147,15 @@ Vec6 spatial_momentum(const Model& model, Data& data, const SE3& base, const Vec
 /// Centre of mass of the whole system, world frame.
 Vec3 center_of_mass(const Model& model, Data& data, const SE3& base, const VecX& q);
 
-/// The simulated state (see the top of this file): q has n entries, v has nv.
+/// The simulated state (see the top of this file): q has nq entries, v has nv.
 struct State {
   SE3 base;
   VecX q;
   VecX v;
 
   State() = default;
-  /// Zero state of the right sizes (base at the identity).
+  /// Zero state of the right sizes, the base at its rest pose (Model::X_tree[0], the identity
+  /// unless a URDF floating joint places it).
   explicit State(const Model& model);
   /// Every number finite and the base rotation orthonormal to 1e-6.
   bool finite() const;

@@ -41,6 +41,43 @@ struct StepperOptions {
   bool passive_forces = true;
 };
 
+/// The model's passive joint forces, the one law every stepper and the simulator apply: on each
+/// joint dof k, damping -d_k qdot_k and regularized Coulomb friction -f_k tanh(qdot_k / eps);
+/// nothing on the base.
+class PassiveForces {
+ public:
+  /// Gathers the damped and rubbing joints of the model once (nothing when !enabled).
+  PassiveForces(const Model& model, double friction_eps, bool enabled = true);
+  /// Whether any joint has damping or friction.
+  bool any() const { return any_; }
+  /// Whether any joint has Coulomb friction.
+  bool has_friction() const { return !rubbing_.empty(); }
+  /// out = base - d w - f tanh(w / eps) over the nv entries (base == nullptr: zero); out may be
+  /// base itself.
+  void apply(const double* base, const double* w, double* out) const;
+  /// base - d_k w - f_k tanh(w / eps), the same for one coordinate k of v.
+  double at(int k, double base, double w) const;
+  /// out = -f tanh(w / eps) (friction alone, nv entries).
+  void friction(const double* w, double* out) const;
+  /// d per coordinate of v (nv; zero on the base and the undamped joints).
+  const VecX& damping() const { return damping_; }
+  /// The coordinates k of v with Coulomb friction f.
+  struct Rubbing {
+    int k;
+    double f;
+  };
+  const std::vector<Rubbing>& rubbing() const { return rubbing_; }
+  double inv_eps() const { return inv_eps_; }
+
+ private:
+  int nv_;
+  bool any_ = false;
+  VecX damping_;
+  VecX friction_;  // f per coordinate of v
+  double inv_eps_;
+  std::vector<Rubbing> rubbing_;
+};
+
 struct StepInfo {
   bool ok = true;
   int evaluations = 0;  ///< dynamics (ABA) calls
@@ -72,6 +109,8 @@ class Stepper {
   const VecX& acceleration(const SE3& base, const VecX& q, const VecX& v, const VecX& tau_cmd);
   /// The passive joint forces at joint rates v (size nv, zero on the base part), into out.
   void passive_forces(const VecX& v, VecX& out) const;
+  /// The passive-force law of this stepper's model and options.
+  const PassiveForces& passive() const { return passive_; }
 
   const Model& model() const { return model_; }
   const StepperOptions& options() const { return opt_; }
@@ -87,32 +126,34 @@ class Stepper {
   Data data_;
   VecX tau_;  ///< total generalized force of the current evaluation
   AccelerationHook* hook_ = nullptr;
-
- private:
-  /// A joint with Coulomb friction: generalized index k and friction f.
-  struct FrictionJoint {
-    int k;
-    double f;
-  };
-  // The passive forces, gathered once from the model (nothing when opt_.passive_forces is off).
-  bool has_passive_ = false;  ///< any damping or friction
-  VecX damping_;              ///< size nv, zero on the base and undamped joints
-  double inv_eps_;            ///< 1 / opt_.friction_eps
-  std::vector<FrictionJoint> friction_;
+  PassiveForces passive_;  ///< nothing when opt_.passive_forces is off
 };
 
-/// Creates a stepper by name for model. Throws std::invalid_argument naming the known ones.
+/// The stepper registry: the one list of integrators (the CLI, its help text, scenes and the
+/// simulator node take their names from it). Built in: euler, semi_implicit_euler (alias
+/// symplectic_euler, its former name), rkmk4, rkmk45 (Dormand-Prince 5(4), adaptive),
+/// variational, rk4_euler_angles, rk4_quaternion.
+///
+/// Creates a stepper by name (or alias) for model. Throws std::invalid_argument naming the known
+/// ones.
 using StepperFactory = std::function<std::unique_ptr<Stepper>(const Model&, const StepperOptions&)>;
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const Model& model,
                                       const StepperOptions& opt = {});
-/// Adds (or replaces) a stepper in the registry. Built in: euler, symplectic_euler, rkmk4,
-/// rkmk45 (Dormand-Prince 5(4), adaptive).
+/// Adds (or replaces) a stepper in the registry.
 void register_stepper(const std::string& name, const std::string& description,
                       StepperFactory factory);
-/// Registered names, sorted.
+/// Makes alias another name of the registered stepper `name` (whose Stepper::name() stays its
+/// own). Throws std::invalid_argument when name is not registered.
+void register_stepper_alias(const std::string& alias, const std::string& name);
+/// Every name make_stepper accepts, aliases included, sorted.
 std::vector<std::string> stepper_names();
-/// One-line description of a registered stepper ("" when unknown).
+/// The registered stepper a name stands for: the name itself, the stepper behind an alias, or ""
+/// when unknown.
+std::string stepper_canonical_name(const std::string& name);
+/// One-line description of a registered name ("" when unknown; an alias says whose it is).
 std::string stepper_description(const std::string& name);
+/// The registry as help text: one line per stepper, "  NAME  DESCRIPTION", its aliases on it.
+std::string stepper_help();
 
 /// An explicit Runge-Kutta tableau (row i of a holds a_ij for j < i). With b_err non-empty the
 /// method is an embedded pair: b_err = b - b_hat estimates the local error of the lower order.
@@ -124,6 +165,11 @@ struct ButcherTableau {
   std::vector<double> b_err;
   /// First-same-as-last: the last stage is evaluated at the step's end point.
   bool fsal = false;
+  /// A fixed-step tableau whose stage i reads only stage i - 1 (classical RK4) runs in one pass
+  /// that feeds each slope into the weighted sum and the next stage point (fewer instructions
+  /// per step: docs/performance.md); false runs it through the general path, as every other
+  /// tableau. The two give the same step to rounding (gtest_integrate).
+  bool fast_path = true;
 };
 ButcherTableau tableau_rk4();
 ButcherTableau tableau_dormand_prince45();

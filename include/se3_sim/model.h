@@ -1,4 +1,4 @@
-// The kinematic tree: bodies joined by one-dof joints, built from a URDF (urdfdom) or in code.
+// The kinematic tree: bodies joined by joints, built from a URDF (urdfdom) or in code.
 //
 // Body 0 is the base: fixed to the world at a given pose, or free (6 dof, integrated on SE(3)).
 // Bodies 1..n each hang on one moving joint (revolute, continuous or prismatic) and are stored
@@ -8,6 +8,9 @@
 // Each body's frame is the URDF joint frame turned so that the joint axis is its z axis; then
 // the joint motion is exp(S q) with S = e_z (revolute) or the linear e_z (prismatic), as in the
 // paper's eq. (26), and every link frame of the URDF is recovered as body frame * offset.
+//
+// Joints (JointModel below) are the one place that knows joint types: every algorithm asks the
+// joint of a body for its coordinates, transform and motion subspace.
 #pragma once
 
 #include <stdexcept>
@@ -19,25 +22,56 @@
 
 namespace se3 {
 
-enum class JointType { Revolute, Prismatic };
+/// What a joint lets its body do relative to its parent. Bodies 1..n have Revolute or Prismatic
+/// joints; body 0's joint is the base's: Free or Fixed.
+enum class JointType {
+  Revolute,   ///< rotation about the body's z axis, S = e_3 (twist order [w; v]); also continuous
+  Prismatic,  ///< translation along the body's z axis, S = e_6
+  Free,       ///< the free-floating base: 6 dof, S = 1; its pose is State::base (on SE(3))
+  Fixed,      ///< the fixed base: no dof, bolted to the world at State::base
+};
+
+/// One joint, as spatial_v2's jcalc or Pinocchio's JointModel: its type, how many coordinates it
+/// has in q (nq) and in the generalized velocity v (nv), where they start (idx_q, idx_v), its
+/// transform X_tree exp(S q) and its motion subspace S (the body-frame twist per unit rate).
+/// The recursions dispatch on it once per body; src/dynamics/joint.h holds the hot-path forms of
+/// the one-dof joints (S a unit vector e_k: the joint-axis sparsity).
+///
+/// The base's pose is not in q: a free base has nq = 0 and nv = 6 (State::base is its group
+/// coordinate, integrated as f <- f exp(h V0)); a fixed base has nq = nv = 0.
+struct JointModel {
+  JointType type = JointType::Revolute;
+  int nq = 1;     ///< coordinates in State::q
+  int nv = 1;     ///< coordinates in the generalized velocity v
+  int idx_q = 0;  ///< first of them in q (Model::finalize sets it)
+  int idx_v = 0;  ///< first of them in v (Model::finalize sets it)
+
+  JointModel() = default;
+  explicit JointModel(JointType t);
+  /// For a one-dof joint, the index k of S = e_k in twist coordinates: 2 (revolute), 5
+  /// (prismatic); -1 for the base's joints.
+  int axis() const {
+    static constexpr int k[] = {2, 5, -1, -1};  // in the order of JointType
+    return k[static_cast<int>(type)];
+  }
+  /// Whether the joint's coordinate is an angle (a revolute joint; without limits it wraps at
+  /// 2 pi, URDF's continuous joint).
+  bool angular() const { return type == JointType::Revolute; }
+  /// S in the body frame, 6 x nv: e_3, e_6, the identity (free base), empty (fixed base).
+  Eigen::Matrix<double, 6, Eigen::Dynamic> motion_subspace() const;
+  /// X_tree exp(S q), the body's frame in its parent's, for the joint's nq coordinates at q (the
+  /// base's joints: X_tree). Reference form; the recursions use src/dynamics/joint.h's.
+  SE3 transform(const SE3& X_tree, const double* q) const;
+  /// "revolute", "prismatic", "free", "fixed".
+  const char* name() const;
+  /// The URDF joint type that writes it: "revolute" (or "continuous" when it has no limits),
+  /// "prismatic"; nullptr for the base's joints.
+  const char* urdf_type(bool limited) const;
+};
 
 /// Thrown for a model that cannot be simulated: the message names the link or joint.
 struct ModelError : std::runtime_error {
   using std::runtime_error::runtime_error;
-};
-
-enum class GeometryType { Box, Cylinder, Sphere, Mesh };
-
-/// A visual or collision shape, placed in its body's frame.
-struct Geometry {
-  GeometryType type = GeometryType::Box;
-  Vec3 size = Vec3::Zero();  ///< box: full extents; cylinder: (radius, length, 0); sphere: (r,0,0)
-  std::string mesh;          ///< mesh file name (not loaded; see renderer stand-ins)
-  Vec3 mesh_scale = Vec3::Ones();
-  SE3 origin;  ///< shape frame in the body frame
-  Eigen::Vector4d rgba = Eigen::Vector4d(0.7, 0.7, 0.7, 1.0);
-  bool has_color = false;
-  std::string link;  ///< URDF link it came from
 };
 
 /// A URDF link and where it sits on its (merged) body.
@@ -61,16 +95,24 @@ struct LinkFrame {
 
 struct Model {
   // ---- structure (sizes: n+1 for per-body arrays, index 0 = base)
-  bool floating = false;
-  int n = 0;                ///< number of moving joints = moving bodies
-  int nv = 0;               ///< n, plus 6 when floating
+  bool floating = false;    ///< the base's joint: Free, else Fixed (finalize() sets joints[0])
+  int n = 0;                ///< number of moving bodies (1..n), each on one joint
+  int nq = 0;               ///< size of State::q: the joints' nq summed (n: every joint has one)
+  int nv = 0;               ///< size of v: the joints' nv summed (n, plus 6 when floating)
   std::vector<int> parent;  ///< parent[0] = -1
   std::vector<std::vector<int>> children;
-  std::vector<JointType> joint_type;  ///< [i] for i >= 1
-  std::vector<SE3> X_tree;            ///< joint frame of body i in its parent's body frame
-  std::vector<Inertia> inertia;       ///< body inertia in its body frame (merged links)
-  /// Coordinate index of body i's joint in the generalized velocity (i - 1, + 6 if floating).
-  int idx_v(int i) const { return floating ? i + 5 : i - 1; }
+  /// The joint of every body: [0] the base's (Free or Fixed, from `floating`), [i] body i's.
+  std::vector<JointModel> joints;
+  /// Joint frame of body i in its parent's body frame; [0]: the base's rest pose in the world
+  /// (identity, or the origin of a URDF floating joint from the world), State(model)'s base.
+  std::vector<SE3> X_tree;
+  std::vector<Inertia> inertia;  ///< body inertia in its body frame (merged links)
+  /// First coordinate of body i's joint in the generalized velocity v (its joint's idx_v).
+  int idx_v(int i) const { return joints[i].idx_v; }
+  /// First coordinate of body i's joint in q (its joint's idx_q).
+  int idx_q(int i) const { return joints[i].idx_q; }
+  /// Coordinates of the base in v: 6 for a free base, else 0 (the joints' rates follow them).
+  int nv_base() const { return joints[0].nv; }
   /// Last body of the subtree rooted at i (bodies i..subtree_end[i] form the subtree).
   std::vector<int> subtree_end;
 
@@ -82,29 +124,41 @@ struct Model {
   std::vector<double> lower, upper;      ///< position limits (-inf, inf) when none
   std::vector<double> effort, velocity;  ///< effort/velocity limits (inf when none)
   std::vector<double> damping, friction;
-  std::vector<LinkFrame> links;   ///< every URDF link, root first
-  std::vector<Geometry> visuals;  ///< body frame placement in Geometry::origin
-  std::vector<int> visual_body;
-  std::vector<Geometry> collisions;
-  std::vector<int> collision_body;
+  std::vector<LinkFrame> links;       ///< every URDF link, root first (shapes: geometry.h)
   std::vector<std::string> warnings;  ///< e.g. inertias that break the triangle inequality
 
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< world frame
 
   /// Index (1..n) of a joint by name, or -1.
   int joint_index(const std::string& joint) const;
-  /// Index into links of a link by name, or -1.
+  /// Index into links of a link by name (a leading '/' ignored), or -1.
   int link_index(const std::string& link) const;
   double total_mass() const;
   /// Checks sizes and numbers; throws ModelError naming the culprit.
   void validate() const;
-  /// Fills children and subtree_end from parent; call after building a model by hand.
+  /// Fills joints[0] (from floating), every joint's idx_q and idx_v, nq, nv, children and
+  /// subtree_end; call after building a model by hand.
   void finalize();
   /// Starts a model by hand: only the base body 0 (link `root`, the given inertia), no joints.
   void start_with_base(const std::string& root, const Inertia& base_inertia = Inertia());
+  /// Adds body n + 1 on a joint of the given type (no limits, damping or friction; change them
+  /// after) and returns its index; finalize() when done.
+  int add_body(int parent, JointType type, const SE3& X_tree, const Inertia& inertia,
+               const std::string& body, const std::string& joint);
 };
 
+/// The frame name of a URDF link: a leading '/' (ROS 1 URDFs from before tf2) stripped, as
+/// tf2 and robot_state_publisher do. Model names (links, body_name, root_link) are frame names.
+std::string frame_name(const std::string& urdf_link);
+
+/// URDF joints: revolute, continuous and prismatic joints become bodies, fixed joints are merged.
+/// A floating joint from the URDF's root link (the world: it must carry no inertia, geometry or
+/// other joint) to the robot's base makes that base free, as `floating` does, and its origin the
+/// base's rest pose (X_tree[0]). Planar joints and floating joints deeper in the tree are
+/// rejected with a ModelError naming the joint.
 struct UrdfOptions {
+  /// The URDF's root link (merged with what is fixed to it, even one named "world") becomes the
+  /// free base.
   bool floating = false;
   /// Joints listed here are locked (treated as fixed) at the given positions.
   std::vector<std::pair<std::string, double>> locked;

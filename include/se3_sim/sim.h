@@ -13,6 +13,7 @@
 #include "se3_sim/constraints.h"
 #include "se3_sim/controllers.h"
 #include "se3_sim/integrate.h"
+#include "se3_sim/limits.h"
 
 namespace se3 {
 
@@ -21,7 +22,8 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A scene (config/scenes/*.yaml). Keys, all optional:
+/// A scene (config/scenes/*.yaml): standard YAML (yaml-cpp), one document, a map of these keys,
+/// all optional; unknown keys, wrong types and values out of range are errors naming the line.
 ///   name: text                      robot: data/robots/panda.urdf | chain:N
 ///       without robot, the robot comes from outside (scene_model's urdf_xml, e.g. the
 ///       robot_description parameter); a scene that names no joints fits any robot
@@ -47,8 +49,8 @@ struct SceneError : std::runtime_error {
 struct Scene {
   std::string file;  ///< the scene file ("" when parsed from text)
   std::string name;
-  std::string robot;       ///< as written
-  std::string robot_path;  ///< resolved file, or "chain:N"
+  std::string robot;       ///< as written ("" when the scene names none)
+  std::string robot_path;  ///< resolved file, or "chain:N" ("" when the scene names no robot)
   bool floating = true;
   bool base_given = false;  ///< the scene says base: free or fixed
   bool has_base_inertia = false;
@@ -77,23 +79,35 @@ struct Scene {
   std::vector<ControllerSpec> controllers;  ///< run inside the simulator (empty: none)
 };
 
-/// Reads a scene file. Throws SceneError.
+/// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.
 Scene load_scene(const std::string& path);
-/// Parses scene text; relative robot paths are resolved against base_dir.
+/// Parses scene text; relative robot paths are resolved against base_dir. The text is checked
+/// against the limits of limits.h (size, nesting, items) before yaml-cpp parses it.
 Scene parse_scene(const std::string& text, const std::string& base_dir,
                   const std::string& file_for_messages = "<scene>");
 
 /// The model a scene names: its robot (or urdf_xml when not empty, e.g. robot_description),
-/// base free or fixed, locked joints, base inertia and gravity. Throws ModelError/SceneError.
+/// base free or fixed, locked joints, base inertia and gravity. Throws ModelError/SceneError
+/// (no robot at all; a locked joint the robot lacks, naming the scene).
 Model scene_model(const Scene& scene, const std::string& urdf_xml = "");
-/// The scene's initial state for model (joint names not in the model are an error).
+/// The scene's initial state for model (a joint the model does not move is a SceneError naming
+/// the scene and the joint).
 State scene_state(const Scene& scene, const Model& model);
 /// A random state: joints uniform within their limits ([-pi, pi] when unlimited), joint rates
 /// and base twist uniform in [-1, 1], base at the identity. Fixed by seed.
 State random_state(const Model& model, unsigned seed);
-/// Minimal URDF text of a model (links, joints, inertials, box visuals), for robots that exist
-/// only in code (chain:N), so robot_description can be published.
-std::string model_to_urdf(const Model& model);
+/// Minimal URDF text of a model (links, joints, inertials, and the visuals of `geometry` when
+/// given), for robots that exist only in code (chain:N), so robot_description can be published.
+std::string model_to_urdf(const Model& model, const GeometryModel* geometry = nullptr);
+
+/// The geometry of a scene's robot (geometry.h): from urdf_xml when not empty, else from the
+/// scene's robot file (relative meshes beside it), or chain_geometry for chain:N.
+GeometryModel scene_geometry(const Scene& scene, const Model& model,
+                             const std::string& urdf_xml = "", const GeometryOptions& opt = {});
+/// scene.constraints with the collision geometry that contacts_from_collisions needs attached
+/// (primitives only: meshes are not loaded, as contacts skip them).
+ConstraintSpec scene_constraints(const Scene& scene, const Model& model,
+                                 const std::string& urdf_xml = "");
 
 /// An upper bound of the kinetic energy that needs no kinematics, for the divergence guard.
 /// Body i's angular speed is at most |w0| plus the revolute joint rates on its path, and its
@@ -113,15 +127,18 @@ class KineticEnergyBound {
  private:
   struct Body {
     int parent = -1;
-    int iv = 0;  ///< index of the joint rate in v
-    bool prismatic = false;
+    int iv = 0;         ///< index of the joint rate in v
+    int iq = 0;         ///< index of the joint position in q
+    double turn = 0;    ///< |angular part of S|: 1 for a revolute joint, 0 for a prismatic one
+    double slide = 0;   ///< |linear part of S|: 0 for a revolute joint, 1 for a prismatic one
     double offset = 0;  ///< |joint origin| in the parent's frame
     double com = 0;     ///< |centre of mass| in the body frame
     double mass = 0;
     double trace = 0;  ///< trace of the rotational inertia about the body origin
   };
   /// Per body, along its path from the base: length L from the base origin to the body origin,
-  /// sums W of |qdot| and P of |qdot| L over the revolute joints, S of |qdot| over the prismatic.
+  /// sums W of |qdot| and P of |qdot| L over the revolute joints, S of |qdot| over the prismatic
+  /// (each joint counted by its turn and slide).
   struct Path {
     double L = 0, W = 0, P = 0, S = 0;
   };
@@ -325,8 +342,8 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
 // ------------------------------------------------------------------ `se3_dyn simulate`
 /// Options of a headless run (the command line's `simulate`).
 struct SimulateOptions {
-  std::string model;            ///< MODEL.urdf or chain:N; used when scene is empty
-  bool floating = false;        ///< with model: free base
+  std::string model;            ///< MODEL.urdf or chain:N (with a scene: replaces its robot)
+  bool floating = false;        ///< free base (with a scene: when it does not say base:)
   std::string scene;            ///< SCENE.yaml: robot, base, initial state, gravity, integrator, dt
   std::string integrator;       ///< "" = the scene's, else rkmk4
   double dt = 0;                ///< 0 = the scene's, else 0.001
@@ -337,6 +354,8 @@ struct SimulateOptions {
   bool has_gravity = false;     ///< override gravity with `gravity`
   Vec3 gravity = Vec3(0, 0, -9.81);
   std::string out_csv;  ///< trajectory file ("" = none): t, base pose and twist, q:, v:, E
+  /// Most body-steps (steps x bodies; an adaptive stepper's internal steps count) of the run.
+  double max_body_steps = limits::kMaxBodySteps;
 };
 
 /// The figures `se3_dyn simulate --json` prints. NaN where a figure does not apply (print null).
@@ -361,13 +380,18 @@ struct SimulateResult {
   double com_drift_max = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t substeps = 0, rejected = 0, evaluations = 0;
   bool diverged = false;
-  std::string status;  ///< the divergence reason ("" when the run completed)
+  /// The run was stopped at SimulateOptions::max_body_steps (adaptive internal steps).
+  bool stopped = false;
+  std::string status;  ///< why the run ended early ("" when it completed)
 };
 
-/// Runs a scene or model headless with zero commanded torques. Throws SceneError, ModelError or
-/// std::invalid_argument on bad input; a divergence ends the run early with diverged = true.
+/// Runs a scene or model headless with zero commanded torques (a model and a scene together: the
+/// model replaces the scene's robot). Throws SceneError, ModelError or std::invalid_argument on
+/// bad input, and on a run beyond limits::kMaxSteps or kMaxBodySteps (refused before anything is
+/// built or stepped); a divergence ends the run early with diverged = true.
 SimulateResult simulate_headless(const SimulateOptions& options);
-/// One-line JSON object of the DESIGN.md `simulate --json` keys (NaN printed as null).
+/// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null), and
+/// "diverged" (true/false) and "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);
 
 }  // namespace se3

@@ -191,11 +191,37 @@ inline void set_inertia_upper(const Inertia& J, Mat6& out) {
   up(out, 5, 5) = J.m;
 }
 
+// The inward step of body i on joint J (eqs. 38, 40, 41): the articulated inertia's projection
+// Ia = IA - U U^T / D (zero row and column at the axis) and the bias force pa = pA + Ia c + U u / D
+// go to the parent, Ad*_{f^-1} Ia Ad_{f^-1} into its IA (upper triangle) and Ad*_{f^-1} pa into
+// its pA. f = Xup: the body in its parent.
+template <class J>
+inline void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
+                        const Vec6& pA, const Vec6& c, Mat6& IAp, Vec6& pAp) {
+  constexpr int k = J::axis;
+  Vec6 pa;
+  if constexpr (k == 2) {
+    pa = inward_revolute(f, IA, U, Dinv, u, pA, c, IAp);
+  } else {
+    double ia[6][6];
+    const Vec6 Ud = U * Dinv;
+    for (int cc = 0; cc < 6; ++cc) {
+      for (int r = 0; r <= cc; ++r) ia[r][cc] = ia[cc][r] = up(IA, r, cc) - Ud[r] * U[cc];
+    }
+    for (int r = 0; r < 6; ++r) ia[r][k] = ia[k][r] = 0;
+    pa = pA + Ud * u;
+    for (int r = 0; r < 6; ++r) {
+      pa[r] += ia[r][0] * c[0] + ia[r][1] * c[1] + ia[r][3] * c[3] + ia[r][4] * c[4];
+    }
+    add_transformed_inertia(f, ia, IAp);
+  }
+  detail::add_force(f, pa.data(), pAp.data());
+}
+
 }  // namespace
 
 const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
                 const VecX& tau, const Vec6* f_ext_base) {
-  const int off = model.floating ? 6 : 0;
   detail::joint_transforms(model, data, q);
   // Outward: velocities (33), gamma (34), J_j and beta_j (39).
   if (model.floating) {
@@ -208,52 +234,34 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     data.V[0].setZero();
   }
   for (int i = 1; i <= model.n; ++i) {
-    const double qd = v[off + i - 1];
+    const JointModel& jm = model.joints[i];
+    const double qd = v[jm.idx_v];
     double* V = data.V[i].data();
-    detail::inv_motion(data.Xup[i], data.V[model.parent[i]].data(), V);
-    double* c = data.c[i].data();
-    if (model.joint_type[i] == JointType::Revolute) {
-      V[2] += qd;
-      c[0] = qd * V[1], c[1] = -qd * V[0], c[2] = 0, c[3] = qd * V[4], c[4] = -qd * V[3], c[5] = 0;
-    } else {
-      V[5] += qd;
-      c[0] = c[1] = c[2] = 0, c[3] = qd * V[1], c[4] = -qd * V[0], c[5] = 0;
-    }
+    detail::with_joint(jm, [&](auto J) {
+      detail::child_twist(J, data.Xup[i], data.V[model.parent[i]].data(), qd, V);
+      J.bias_acceleration(V, qd, data.c[i].data());
+    });
     const Inertia& I = model.inertia[i];
     set_inertia_upper(I, data.IA[i]);
     detail::bias_force(I, V, data.F[i].data());  // pA, eq. (39): -ad*_V J V
   }
   // Inward: articulated inertias (38) and bias forces (40)-(41).
   for (int i = model.n; i >= 1; --i) {
-    const int k = detail::axis_index(model.joint_type[i]);
-    const Mat6& IA = data.IA[i];
-    Vec6& U = data.U[i];
-    for (int r = 0; r < 6; ++r) U[r] = r <= k ? up(IA, r, k) : up(IA, k, r);  // IA S
-    const double Dinv = 1.0 / U[k];
-    data.Dinv[i] = Dinv;
-    const double u = tau[off + i - 1] - data.F[i][k];
-    data.u[i] = u;
-    const int p = model.parent[i];
-    if (p == 0 && !model.floating) continue;
-    Vec6 pa;
-    if (k == 2) {
-      pa = inward_revolute(data.Xup[i], IA, U, Dinv, u, data.F[i], data.c[i], data.IA[p]);
-    } else {
-      // Ia = IA - U U^T / D (symmetric, zero row and column k), pa = pA + Ia c + U u / D.
-      double ia[6][6];
-      const Vec6 Ud = U * Dinv;
-      for (int c = 0; c < 6; ++c) {
-        for (int r = 0; r <= c; ++r) ia[r][c] = ia[c][r] = up(IA, r, c) - Ud[r] * U[c];
-      }
-      for (int r = 0; r < 6; ++r) ia[r][k] = ia[k][r] = 0;
-      const Vec6& c = data.c[i];
-      pa = data.F[i] + Ud * u;
-      for (int r = 0; r < 6; ++r) {
-        pa[r] += ia[r][0] * c[0] + ia[r][1] * c[1] + ia[r][3] * c[3] + ia[r][4] * c[4];
-      }
-      add_transformed_inertia(data.Xup[i], ia, data.IA[p]);
-    }
-    detail::add_force(data.Xup[i], pa.data(), data.F[p].data());
+    const JointModel& jm = model.joints[i];
+    const int iv = jm.idx_v;
+    detail::with_joint(jm, [&](auto J) {
+      constexpr int k = J.axis;
+      const Mat6& IA = data.IA[i];
+      Vec6& U = data.U[iv];
+      for (int r = 0; r < 6; ++r) U[r] = r <= k ? up(IA, r, k) : up(IA, k, r);  // IA S
+      const double Dinv = 1.0 / U[k];
+      data.Dinv[iv] = Dinv;
+      const double u = tau[iv] - data.F[i][k];
+      data.u[iv] = u;
+      const int p = model.parent[i];
+      if (p == 0 && !model.floating) return;
+      inward_step(J, data.Xup[i], IA, U, Dinv, u, data.F[i], data.c[i], data.IA[p], data.F[p]);
+    });
   }
   // Outward: accelerations (42)-(43), with gravity as the fictitious base acceleration.
   Vec6 ag;
@@ -266,19 +274,20 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     data.A[0] = ag;
   }
   for (int i = 1; i <= model.n; ++i) {
-    const int k = detail::axis_index(model.joint_type[i]);
+    const JointModel& jm = model.joints[i];
+    const int iv = jm.idx_v;
     double* a = data.A[i].data();
     detail::inv_motion(data.Xup[i], data.A[model.parent[i]].data(), a);
     const double* c = data.c[i].data();
-    const double* U = data.U[i].data();
+    const double* U = data.U[iv].data();
     double Ua = 0;
     for (int r = 0; r < 6; ++r) {
       a[r] += c[r];
       Ua += U[r] * a[r];
     }
-    const double qdd = (data.u[i] - Ua) * data.Dinv[i];
-    a[k] += qdd;
-    data.ddq[off + i - 1] = qdd;
+    const double qdd = (data.u[iv] - Ua) * data.Dinv[iv];
+    detail::with_joint(jm, [&](auto J) { a[J.axis] += qdd; });
+    data.ddq[iv] = qdd;
   }
   return data.ddq;
 }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "joint.h"
+
 namespace se3 {
 
 std::string constraint_type_name(ConstraintType t) {
@@ -116,42 +118,48 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
       ++idx;
     }
     if (spec.contacts_from_collisions) {
-      for (size_t g = 0; g < model.collisions.size(); ++g) {
-        const Geometry& geo = model.collisions[g];
-        const int body = model.collision_body[g];
+      if (!spec.geometry) {
+        throw ModelError("contacts from collisions need the model's collision geometry");
+      }
+      for (const GeometryObject& geo : spec.geometry->collisions) {
+        const int body = geo.body;
+        if (body < 0 || body > model.n) continue;
         const std::string base_name =
             "contact:" + (geo.link.empty() ? model.body_name[body] : geo.link) + ":";
         auto add = [&](const Vec3& local, double radius) {
           PointRef p;
           p.body = body;
-          p.r = geo.origin.act(local);
+          p.r = geo.placement.act(local);
           contacts_.push_back(p);
           contact_radius_.push_back(radius);
           contact_names_.push_back(base_name + std::to_string(idx++));
         };
-        switch (geo.type) {
-          case GeometryType::Sphere:
-            add(Vec3::Zero(), geo.size.x());
+        const Shape& sh = geo.shape;
+        switch (sh.type) {
+          case ShapeType::Sphere:
+            add(Vec3::Zero(), sh.radius);
             break;
-          case GeometryType::Box:
+          case ShapeType::Box:
             for (int c = 0; c < 8; ++c) {
-              add(0.5 * Vec3((c & 1) ? geo.size.x() : -geo.size.x(),
-                             (c & 2) ? geo.size.y() : -geo.size.y(),
-                             (c & 4) ? geo.size.z() : -geo.size.z()),
+              add(0.5 * Vec3((c & 1) ? sh.box.x() : -sh.box.x(), (c & 2) ? sh.box.y() : -sh.box.y(),
+                             (c & 4) ? sh.box.z() : -sh.box.z()),
                   0.0);
             }
             break;
-          case GeometryType::Cylinder:
+          case ShapeType::Cylinder:
             for (int e = -1; e <= 1; e += 2) {
               for (int k = 0; k < 8; ++k) {
                 const double t = k * M_PI / 4;
-                add(Vec3(geo.size.x() * std::cos(t), geo.size.x() * std::sin(t),
-                         0.5 * e * geo.size.y()),
+                add(Vec3(sh.radius * std::cos(t), sh.radius * std::sin(t), 0.5 * e * sh.length),
                     0.0);
               }
             }
             break;
-          case GeometryType::Mesh:
+          case ShapeType::Capsule:
+            add(Vec3(0, 0, -0.5 * sh.length), sh.radius);
+            add(Vec3(0, 0, 0.5 * sh.length), sh.radius);
+            break;
+          case ShapeType::Mesh:
             break;
         }
       }
@@ -160,6 +168,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   const int nc = static_cast<int>(contacts_.size());
   max_rows_ = nb_ + (spec.joint_limits ? 2 * model.n : 0) + 3 * nc;
 
+  data_.reserve_minv(model);  // minv runs inside time steps
   Sw_.assign(nv, Vec6::Zero());
   Vb_.assign(model.n + 1, Vec6::Zero());
   Ab_.assign(model.n + 1, Vec6::Zero());
@@ -234,19 +243,20 @@ void ConstraintSystem::kinematics(const SE3& base, const VecX& q, const VecX* v)
     for (int k = 0; k < 6; ++k) Sw_[k] = act_motion(data_.oMb[0], Vec6::Unit(k));
   }
   for (int i = 1; i <= m.n; ++i) {
-    const int ax = m.joint_type[i] == JointType::Revolute ? 2 : 5;
-    Sw_[m.idx_v(i)] = act_motion(data_.oMb[i], Vec6::Unit(ax));
+    detail::with_joint(m.joints[i],
+                       [&](auto J) { J.world_axis(data_.oMb[i], Sw_[m.idx_v(i)].data()); });
   }
   if (!v) return;
-  Vb_[0] = m.floating ? Vec6(v->head<6>()) : Vec6::Zero();
+  body_twists(m, data_, *v);
+  Vb_.swap(data_.V);  // kept here: the next aba call on data_ overwrites data_.V
+  const std::vector<Vec6>& Vb = Vb_;
   Ab_[0].setZero();
   for (int i = 1; i <= m.n; ++i) {
-    const int ax = m.joint_type[i] == JointType::Revolute ? 2 : 5;
-    const double qd = (*v)[m.idx_v(i)];
     const int p = m.parent[i];
-    Vb_[i] = act_inv_motion(data_.Xup[i], Vb_[p]);
-    Vb_[i][ax] += qd;
-    Ab_[i] = act_inv_motion(data_.Xup[i], Ab_[p]) + cross_motion(Vb_[i], Vec6::Unit(ax) * qd);
+    Ab_[i] = act_inv_motion(data_.Xup[i], Ab_[p]);
+    detail::with_joint(m.joints[i], [&](auto J) {
+      J.add_bias_acceleration(Vb[i].data(), (*v)[m.idx_v(i)], Ab_[i].data());
+    });
   }
 }
 

@@ -5,23 +5,19 @@
 // - local frames (shallow trees: arms, legged robots): composite inertias Ic_p += Ad* Ic_i Ad^-1
 //   through the joint transforms (no forward kinematics), F_i = Ic_i S_i, and D_ji = S_j^T F_i
 //   as F_i travels inward through every ancestor j. The columns of a subtree are contiguous,
-//   so the whole block of F's travels at once, two columns per SSE2 register.
+//   so the whole block of F's travels at once.
 // - world frame (deep chains): composite inertias add without transforms, and
 //   D_ji = S_j^T (Ic_i S_i) with world axes, six multiply-adds per entry instead of a wrench
 //   transform per entry.
 #include "joint.h"
+#include "row_kernel.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
 
-using detail::load2;
-using detail::store2;
-using detail::v2d;
-
 namespace {
 
 const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
-  const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
   detail::joint_transforms(model, data, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) data.Ic[i] = model.inertia[i];
@@ -33,19 +29,14 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     const bool carry = p > 0 || model.floating;
     const Inertia& Ic = data.Ic[i];  // complete: every descendant has been added
     if (carry) Ic.add_transformed(data.Xup[i], data.Ic[p]);
-    // F_i = Ic_i S_i: a column of eq. (23)'s matrix.
-    const int col = off + i - 1, end = off + model.subtree_end[i];  // subtree columns [col, end)
-    const double* I = Ic.I.data();
-    int k;
-    if (model.joint_type[i] == JointType::Revolute) {  // S = e_3
-      F[0][col] = I[6], F[1][col] = I[7], F[2][col] = I[8];
-      F[3][col] = -Ic.h[1], F[4][col] = Ic.h[0], F[5][col] = 0;
-      k = 2;
-    } else {  // S = e_6
-      F[0][col] = Ic.h[1], F[1][col] = -Ic.h[0], F[2][col] = 0;
-      F[3][col] = 0, F[4][col] = 0, F[5][col] = Ic.m;
-      k = 5;
-    }
+    // F_i = Ic_i S_i: a column of eq. (23)'s matrix. The subtree's columns are [col, end).
+    const JointModel& jm = model.joints[i];
+    const JointModel& last = model.joints[model.subtree_end[i]];
+    const int col = jm.idx_v, end = last.idx_v + last.nv;
+    const int k = jm.axis();
+    double Fi[6];
+    detail::with_joint(jm, [&](auto J) { J.inertia_column(Ic, Fi); });
+    for (int r = 0; r < 6; ++r) F[r][col] = Fi[r];
     // Row i of D over the subtree: D_ic = S_i^T F_c, every F_c of the subtree in frame i now.
     double* mcol = M + static_cast<std::ptrdiff_t>(col) * nv;
     for (int c = col; c < end; ++c) {
@@ -55,14 +46,7 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     if (!carry) continue;
     const double* R = data.Xup[i].R.data();
     const double* t = data.Xup[i].p.data();
-    int c = col;
-    for (; c + 2 <= end; c += 2) {
-      v2d x[6];
-      for (int r = 0; r < 6; ++r) x[r] = load2(F[r] + c);
-      detail::force_to_parent(R, t, x);
-      for (int r = 0; r < 6; ++r) store2(F[r] + c, x[r]);
-    }
-    if (c < end) {
+    for (int c = col; c < end; ++c) {
       double x[6];
       for (int r = 0; r < 6; ++r) x[r] = F[r][c];
       detail::force_to_parent(R, t, x);
@@ -82,8 +66,11 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
 }
 
 const MatX& crba_world(const Model& model, Data& data, const SE3& base, const VecX& q) {
-  const int off = model.floating ? 6 : 0;
   const int nv = model.nv;
+  // Every moving body's joint has one dof, numbered in body order after the base's: body b's
+  // column is v1 + b. Row bounds in body indices let the compiler run the row loops below on one
+  // index (docs/performance.md).
+  const int v1 = model.nv_base() - 1;
   forward_kinematics(model, data, base, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
     data.Ic[i] = model.inertia[i].transformed(data.oMb[i]);
@@ -93,19 +80,9 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
   double* J[6];
   for (int r = 0; r < 6; ++r) J[r] = data.Jrow.row(r).data();
   for (int i = 1; i <= model.n; ++i) {
-    const double* R = data.oMb[i].R.data();
-    const double* p = data.oMb[i].p.data();
-    const double zx = R[6], zy = R[7], zz = R[8];
-    const int col = off + i - 1;
-    if (model.joint_type[i] == JointType::Revolute) {
-      J[0][col] = zx, J[1][col] = zy, J[2][col] = zz;
-      J[3][col] = p[1] * zz - p[2] * zy;
-      J[4][col] = p[2] * zx - p[0] * zz;
-      J[5][col] = p[0] * zy - p[1] * zx;
-    } else {
-      J[0][col] = J[1][col] = J[2][col] = 0;
-      J[3][col] = zx, J[4][col] = zy, J[5][col] = zz;
-    }
+    double S[6];
+    detail::with_joint(model.joints[i], [&](auto Jt) { Jt.world_axis(data.oMb[i], S); });
+    for (int r = 0; r < 6; ++r) J[r][v1 + i] = S[r];
   }
   double* M = data.M.data();  // column-major, leading dimension nv
   for (int i = model.n; i >= 1; --i) {
@@ -118,11 +95,12 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
       for (int r = 0; r < 9; ++r) Ip.I.data()[r] += Ic.I.data()[r];
     }
     // F = Ic S_i.
-    const int col = off + i - 1;
+    const int col = v1 + i;
     const double S[6] = {J[0][col], J[1][col], J[2][col], J[3][col], J[4][col], J[5][col]};
     double Fv[6];
     detail::inertia_times(Ic, S, Fv);
     const double F0 = Fv[0], F1 = Fv[1], F2 = Fv[2], F3 = Fv[3], F4 = Fv[4], F5 = Fv[5];
+    const double* const Jc[6] = {J[0], J[1], J[2], J[3], J[4], J[5]};
     // D(j, i) = S_j . F for every ancestor j of i (and j = i), written to both triangles.
     // Ancestors come in runs of consecutive indices (a chain is a single run); column i above
     // the diagonal is contiguous in column-major storage.
@@ -130,21 +108,8 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
     int j = i;
     while (j > 0) {
       const int s = data.run_start[j];
-      const int c0 = off + s - 1, c1 = off + j;
-      int c = c0;
-      for (; c + 2 <= c1; c += 2) {  // two entries per step, one SSE2 register
-        const v2d x = F0 * load2(J[0] + c) + F1 * load2(J[1] + c) + F2 * load2(J[2] + c) +
-                      F3 * load2(J[3] + c) + F4 * load2(J[4] + c) + F5 * load2(J[5] + c);
-        store2(mcol + c, x);
-        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x[0];
-        M[col + static_cast<std::ptrdiff_t>(c + 1) * nv] = x[1];
-      }
-      if (c < c1) {
-        const double x =
-            F0 * J[0][c] + F1 * J[1][c] + F2 * J[2][c] + F3 * J[3][c] + F4 * J[4][c] + F5 * J[5][c];
-        mcol[c] = x;
-        M[col + static_cast<std::ptrdiff_t>(c) * nv] = x;
-      }
+      const int c0 = v1 + s, c1 = v1 + j + 1;  // the run s..j
+      detail::row_segment(Fv, Jc, c0, c1, mcol, M + col, nv);
       j = model.parent[s];
     }
     if (model.floating) {  // the base rows: S_0 = 1 in the base frame, Ad*_{f0}^-1 F
@@ -165,6 +130,7 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
 }  // namespace
 
 const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q) {
+  if (!data.crba_reserved()) data.reserve_crba(model);
   return data.crba_local ? crba_local(model, data, q) : crba_world(model, data, base, q);
 }
 

@@ -10,21 +10,21 @@ constexpr int kCrbaLocalPairsPerBody = 8;
 
 Data::Data(const Model& model) {
   const size_t nb = static_cast<size_t>(model.n) + 1;
+  const size_t nq = static_cast<size_t>(model.nq), nv = static_cast<size_t>(model.nv);
   Xup.assign(nb, SE3());
-  sin_q.assign(nb, 0.0);
-  cos_q.assign(nb, 1.0);
-  VA.assign(2 * nb, Vec6::Zero());
   oMb.assign(nb, SE3());
   V.assign(nb, Vec6::Zero());
   A.assign(nb, Vec6::Zero());
   c.assign(nb, Vec6::Zero());
   F.assign(nb, Vec6::Zero());
   IA.assign(nb, Mat6::Zero());
-  U.assign(nb, Vec6::Zero());
-  Dinv.assign(nb, 0.0);
-  u.assign(nb, 0.0);
   Ic.assign(nb, Inertia());
-  S.assign(nb, Vec6::Zero());
+  sin_q.assign(nq, 0.0);
+  cos_q.assign(nq, 1.0);
+  U.assign(nv, Vec6::Zero());
+  Dinv.assign(nv, 0.0);
+  u.assign(nv, 0.0);
+  S.assign(nv, Vec6::Zero());
   P_slot.assign(nb, 0);
   run_start.assign(nb, 0);
   for (int j = 1; j <= model.n; ++j) {
@@ -38,10 +38,6 @@ Data::Data(const Model& model) {
   tau = VecX::Zero(model.nv);
   ddq = VecX::Zero(model.nv);
   nle = VecX::Zero(model.nv);
-  M = MatX::Zero(model.nv, model.nv);
-  Minv = MatX::Zero(model.nv, model.nv);
-  Jrow = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>::Zero(6, model.nv);
-  Fm = Mat6X::Zero(6, model.nv);
   // D^-1's forward pass keeps one 6 x nv acceleration block per open branch: a body reuses its
   // parent's block when it is the parent's last child (all earlier siblings are done by then).
   int slots = 1;
@@ -49,10 +45,29 @@ Data::Data(const Model& model) {
     const auto& sib = model.children[model.parent[i]];
     P_slot[i] = (sib.back() == i) ? P_slot[model.parent[i]] : slots++;
   }
-  Pm.assign(slots, Mat6X::Zero(6, model.nv));
+  Pm.resize(slots);
 }
 
-State::State(const Model& model) : q(VecX::Zero(model.n)), v(VecX::Zero(model.nv)) {}
+void Data::reserve_crba(const Model& model) {
+  if (crba_reserved_) return;
+  M = MatX::Zero(model.nv, model.nv);
+  Jrow = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>::Zero(6, model.nv);
+  if (Fm.cols() != model.nv) Fm = Mat6X::Zero(6, model.nv);
+  crba_reserved_ = true;
+}
+
+void Data::reserve_minv(const Model& model) {
+  if (minv_reserved_) return;
+  Minv = MatX::Zero(model.nv, model.nv);
+  if (Fm.cols() != model.nv) Fm = Mat6X::Zero(6, model.nv);
+  for (Mat6X& P : Pm) P = Mat6X::Zero(6, model.nv);
+  minv_reserved_ = true;
+}
+
+State::State(const Model& model)
+    : base(model.X_tree.empty() ? SE3() : model.X_tree[0]),
+      q(VecX::Zero(model.nq)),
+      v(VecX::Zero(model.nv)) {}
 
 bool State::finite() const {
   return detail::all_finite(static_cast<int>(q.size()), q.data()) &&

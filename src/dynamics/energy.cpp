@@ -1,30 +1,11 @@
 // Energy, momentum and centre of mass of the whole system.
-#include "joint.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
-namespace {
-
-// Body twists, eq. (33), and placements.
-void velocities(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v) {
-  const int off = model.floating ? 6 : 0;
-  forward_kinematics(model, data, base, q);
-  if (model.floating) {
-    data.V[0] = v.head<6>();
-  } else {
-    data.V[0].setZero();
-  }
-  for (int i = 1; i <= model.n; ++i) {
-    data.V[i] = act_inv_motion(data.Xup[i], data.V[model.parent[i]]);
-    data.V[i][detail::axis_index(model.joint_type[i])] += v[off + i - 1];
-  }
-}
-
-}  // namespace
 
 double kinetic_energy(const Model& model, Data& data, const SE3& base, const VecX& q,
                       const VecX& v) {
-  velocities(model, data, base, q, v);
+  forward_kinematics(model, data, base, q, v);
   double T = 0;
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
     T += data.V[i].dot(model.inertia[i] * data.V[i]);
@@ -46,7 +27,7 @@ double potential_energy(const Model& model, Data& data, const SE3& base, const V
 
 Vec6 spatial_momentum(const Model& model, Data& data, const SE3& base, const VecX& q,
                       const VecX& v) {
-  velocities(model, data, base, q, v);
+  forward_kinematics(model, data, base, q, v);
   Vec6 h = Vec6::Zero();
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
     h += act_force(data.oMb[i], model.inertia[i] * data.V[i]);

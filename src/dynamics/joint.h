@@ -1,20 +1,17 @@
-// One-dof joint helpers shared by the recursions. The body frame of every moving body has its
-// joint axis along z (model.h), so S is e_3 (revolute, angular z) or e_6 (prismatic, linear z)
-// and S^T x, S q, v x (S qd) reduce to a component or two: the joint-axis sparsity.
+// The hot-path forms of the joint model (model.h's JointModel) and the spatial kernels the
+// recursions share. Every moving body's joint has one dof with its axis along the body's z, so
+// S is a unit vector e_K of twist coordinates [w; v]: K = 2 (revolute) or 5 (prismatic), and
+// S^T x, S q, v x (S qd), I S reduce to a component or a column: the joint-axis sparsity.
+// with_joint() is the one dispatch on the joint type: each pass of a recursion calls it once per
+// body, with the step written once for any AxisJoint.
 #pragma once
 
 #include <cmath>
 
-#include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
 namespace detail {
-
-/// Index of the non-zero entry of S in a 6-vector: 2 (revolute) or 5 (prismatic).
-inline int axis_index(JointType t) {
-  return t == JointType::Revolute ? 2 : 5;
-}
 
 /// X_tree * exp(S q) of a revolute joint, given c = cos q and s = sin q: the parent-from-body
 /// displacement f_{i,j} = KK_j exp(S_j q_j) (eq. 26). Rz(q) turns the first two columns.
@@ -33,6 +30,79 @@ inline void revolute_transform(const SE3& Xt, double c, double s, SE3& out) {
 inline void prismatic_transform(const SE3& Xt, double q, SE3& out) {
   out.R = Xt.R;
   out.p = Xt.p + q * Xt.R.col(2);
+}
+
+/// A one-dof joint whose motion subspace is S = e_K (K = 2: rotation about z, K = 5: translation
+/// along z).
+template <int K>
+struct AxisJoint {
+  static_assert(K == 2 || K == 5, "joints turn about or slide along the body's z axis");
+  static constexpr int axis = K;
+
+  /// out = X_tree exp(S q); c = cos q and s = sin q (read by the revolute joint only).
+  static void transform(const SE3& Xt, double q, double c, double s, SE3& out) {
+    if constexpr (K == 2) {
+      (void)q;
+      revolute_transform(Xt, c, s, out);
+    } else {
+      (void)c, (void)s;
+      prismatic_transform(Xt, q, out);
+    }
+  }
+  /// c = V x (S qd), the velocity-product acceleration of eq. (34), for the body's twist V (all
+  /// six entries written).
+  static void bias_acceleration(const double* V, double qd, double* c) {
+    if constexpr (K == 2) {
+      c[0] = qd * V[1], c[1] = -qd * V[0], c[2] = 0, c[3] = qd * V[4], c[4] = -qd * V[3], c[5] = 0;
+    } else {
+      c[0] = c[1] = c[2] = 0, c[3] = qd * V[1], c[4] = -qd * V[0], c[5] = 0;
+    }
+  }
+  /// A += V x (S qd), the same for an acceleration that already holds Ad_{Xup^-1} A_parent.
+  static void add_bias_acceleration(const double* V, double qd, double* A) {
+    if constexpr (K == 2) {
+      A[0] += qd * V[1], A[1] -= qd * V[0], A[3] += qd * V[4], A[4] -= qd * V[3];
+    } else {
+      A[3] += qd * V[1], A[4] -= qd * V[0];
+    }
+  }
+  /// out = J S, the column K of eq. (23)'s matrix of J.
+  static void inertia_column(const Inertia& J, double* out) {
+    const double* I = J.I.data();
+    if constexpr (K == 2) {
+      out[0] = I[6], out[1] = I[7], out[2] = I[8];
+      out[3] = -J.h[1], out[4] = J.h[0], out[5] = 0;
+    } else {
+      out[0] = J.h[1], out[1] = -J.h[0], out[2] = 0;
+      out[3] = 0, out[4] = 0, out[5] = J.m;
+    }
+  }
+  /// out = Ad_f S, the joint's axis in the frame where the body sits at f (the world for f = oMb):
+  /// revolute [z; p x z], prismatic [0; z], z = f.R e_3.
+  static void world_axis(const SE3& f, double* out) {
+    const double* R = f.R.data();
+    const double zx = R[6], zy = R[7], zz = R[8];
+    if constexpr (K == 2) {
+      const double* p = f.p.data();
+      out[0] = zx, out[1] = zy, out[2] = zz;
+      out[3] = p[1] * zz - p[2] * zy;
+      out[4] = p[2] * zx - p[0] * zz;
+      out[5] = p[0] * zy - p[1] * zx;
+    } else {
+      out[0] = out[1] = out[2] = 0;
+      out[3] = zx, out[4] = zy, out[5] = zz;
+    }
+  }
+};
+using RevoluteZ = AxisJoint<2>;
+using PrismaticZ = AxisJoint<5>;
+
+/// f(RevoluteZ()) or f(PrismaticZ()) for the joint of a moving body (Model::validate admits no
+/// other joint on bodies 1..n).
+template <class F>
+inline decltype(auto) with_joint(const JointModel& j, F&& f) {
+  if (j.type == JointType::Revolute) return f(RevoluteZ());
+  return f(PrismaticZ());
 }
 
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
@@ -54,11 +124,17 @@ inline void inv_motion(const SE3& f, const double* in, double* out) {
   }
 }
 
+/// The twist recursion of eq. (33) for one body: V = Ad_{Xup^-1} V_parent + S qd.
+template <class J>
+inline void child_twist(J, const SE3& Xup, const double* Vp, double qd, double* V) {
+  inv_motion(Xup, Vp, V);
+  V[J::axis] += qd;
+}
+
 /// x <- Ad*_{f^-1} x for wrenches x = (n0, n1, n2, f0, f1, f2) given by R, p of f (eq. 19:
-/// (R n + p x R f, R f)); T is double, or v2d for two wrenches at once.
-template <class T>
-inline void force_to_parent(const double* R, const double* p, T (&x)[6]) {
-  T f[3], n[3];
+/// (R n + p x R f, R f)).
+inline void force_to_parent(const double* R, const double* p, double (&x)[6]) {
+  double f[3], n[3];
   for (int r = 0; r < 3; ++r) {
     f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
     n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];

@@ -17,8 +17,12 @@
 namespace se3 {
 
 const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q) {
-  const int off = model.floating ? 6 : 0;
+  if (!data.minv_reserved()) data.reserve_minv(model);
   const int nv = model.nv;
+  // Every moving body's joint has one dof, numbered in body order after the base's: body i's
+  // row and column is v1 + i, its subtree's columns v1 + i .. v1 + subtree_end[i]. Bounds in body
+  // indices let the compiler run the column loops on one index (docs/performance.md).
+  const int v1 = model.nv_base() - 1;
   forward_kinematics(model, data, base, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
     model.inertia[i].transformed(data.oMb[i]).to_matrix(data.IA[i]);
@@ -27,19 +31,15 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
   F.setZero();
   MatX& Mi = data.Minv;
   for (int i = model.n; i >= 1; --i) {
-    const Vec3 z = data.oMb[i].R.col(2);
-    Vec6& S = data.S[i];
-    if (model.joint_type[i] == JointType::Revolute) {
-      S << z, data.oMb[i].p.cross(z);
-    } else {
-      S << 0, 0, 0, z;
-    }
+    const JointModel& jm = model.joints[i];
+    const int row = v1 + i;
+    Vec6& S = data.S[row];
+    detail::with_joint(jm, [&](auto J) { J.world_axis(data.oMb[i], S.data()); });
     const Mat6& IA = data.IA[i];
     const Vec6 U = IA * S;               // (61) up to Omega^-1
     const double Dinv = 1.0 / S.dot(U);  // (60)
-    data.U[i] = U;
-    data.Dinv[i] = Dinv;
-    const int row = off + i - 1;
+    data.U[row] = U;
+    data.Dinv[row] = Dinv;
     const int len = model.subtree_end[i] - i + 1;
     // Row i of D^-1 (upper triangle) is kept as column i (contiguous in column-major storage).
     // The column loops touch entry j of each array only at step j (no loop-carried
@@ -140,10 +140,10 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
   }
   for (int i = 1; i <= model.n; ++i) {
     const int p = model.parent[i];
-    const int row = off + i - 1;
+    const int row = v1 + i;
     double* r = Mi.col(row).data();
     double* mrow = Mi.data() + row;  // row `row` of D^-1, stride nv
-    const Vec6& S = data.S[i];
+    const Vec6& S = data.S[row];
     Data::Mat6X& Pi = data.Pm[data.P_slot[i]];
     double* q0 = Pi.row(0).data();
     double* q1 = Pi.row(1).data();
@@ -153,7 +153,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     double* q5 = Pi.row(5).data();
     const double s0 = S[0], s1 = S[1], s2 = S[2], s3 = S[3], s4 = S[4], s5 = S[5];
     if (p > 0 || model.floating) {
-      const Vec6 W = data.Dinv[i] * data.U[i];
+      const Vec6 W = data.Dinv[row] * data.U[row];
       const double w0 = W[0], w1 = W[1], w2 = W[2], w3 = W[3], w4 = W[4], w5 = W[5];
       const Data::Mat6X& Pp = data.Pm[data.P_slot[p]];
       // P_i may be P_parent itself (same slot): each column is read before it is written.

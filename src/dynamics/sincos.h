@@ -1,5 +1,6 @@
 // Batched sine and cosine of joint angles for the dynamics hot paths (joint_transforms needs
-// cos q_i and sin q_i of every joint first). Two lanes at a time with SSE2, no FMA needed.
+// cos q_i and sin q_i of every joint first). Two lanes at a time (SSE2 on x86-64, NEON on arm64),
+// no FMA needed.
 #pragma once
 
 namespace se3 {
@@ -15,6 +16,10 @@ constexpr double kSinCosBound = 1048576.0;  // 2^20
 /// allocation. Any alignment. s or c may be the same array as x (in place); other overlaps are
 /// not allowed. sin(+-0) = +-0, sin(x) = x for tiny x (subnormals too), results in [-1, 1].
 void sincos_n(const double* x, int n, double* s, double* c);
+
+/// The same for one element, one lane at a time: sincos_n's results bit for bit (the scalar
+/// reference of its two-lane kernel, test/gtest_sincos.cpp).
+void sincos_reference(double x, double* s, double* c);
 
 }  // namespace detail
 }  // namespace se3

@@ -12,19 +12,14 @@
 // the start of every step and turned back into a rotation at its end (for Euler angles a
 // rotation and its angles convert both ways exactly away from the singularity). For a fixed
 // base there are no base coordinates and both are plain RK4 (= rkmk4).
-//
-// This file also registers the steppers of issue 6 (these two and `variational`) by name.
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "se3_sim/integrate.h"
+#include "steppers.h"
 
 namespace se3 {
-
-std::unique_ptr<Stepper> make_variational_stepper(const Model& model, const StepperOptions& opt);
-void register_extra_steppers();
-
 namespace {
 
 enum class Chart { EulerZYX, Quaternion };
@@ -51,10 +46,10 @@ class CoordinateRk4Stepper final : public Stepper {
       : Stepper(model, opt),
         chart_(chart),
         nc_(model.floating ? (chart == Chart::EulerZYX ? 3 : 4) : 0),
-        size_(nc_ + (model.floating ? 3 : 0) + model.n + model.nv),
+        size_(nc_ + (model.floating ? 3 : 0) + model.nq + model.nv),
         y_(VecX::Zero(size_)),
         yt_(VecX::Zero(size_)),
-        q_(VecX::Zero(model.n)),
+        q_(VecX::Zero(model.nq)),
         v_(VecX::Zero(model.nv)) {
     for (auto& k : k_) k = VecX::Zero(size_);
   }
@@ -65,7 +60,7 @@ class CoordinateRk4Stepper final : public Stepper {
   int order() const override { return 4; }
 
   StepInfo step(State& x, const VecX& tau, double h) override {
-    const int n = model_.n, nv = model_.nv;
+    const int n = model_.nq, nv = model_.nv;
     const int pp = nc_, pq = nc_ + (model_.floating ? 3 : 0), pv = pq + n;
     if (model_.floating) {
       if (chart_ == Chart::EulerZYX) {
@@ -113,7 +108,7 @@ class CoordinateRk4Stepper final : public Stepper {
   }
 
   void derivative(const VecX& y, const VecX& tau, VecX& dy) {
-    const int n = model_.n, nv = model_.nv;
+    const int n = model_.nq, nv = model_.nv;
     const int pp = nc_, pq = nc_ + (model_.floating ? 3 : 0), pv = pq + n;
     q_ = y.segment(pq, n);
     v_ = y.segment(pv, nv);
@@ -150,39 +145,19 @@ class CoordinateRk4Stepper final : public Stepper {
   VecX k_[4];
 };
 
-void register_all() {
-  register_stepper(
-      "variational",
-      "Lie-group variational integrator (trapezoidal discrete Lagrangian on exp arcs of SE(3)): "
-      "implicit, symplectic, momentum-preserving, time-reversible (order 2)",
-      [](const Model& m, const StepperOptions& o) { return make_variational_stepper(m, o); });
-  register_stepper(
-      "rk4_euler_angles",
-      "baseline: classical RK4 with the base orientation in ZYX Euler angles (singular at "
-      "pitch = +-90 deg; order 4 away from it)",
-      [](const Model& m, const StepperOptions& o) -> std::unique_ptr<Stepper> {
-        return std::make_unique<CoordinateRk4Stepper>(Chart::EulerZYX, m, o);
-      });
-  register_stepper(
-      "rk4_quaternion",
-      "baseline: classical RK4 with the base orientation as a quaternion, renormalized after "
-      "each step (order 4)",
-      [](const Model& m, const StepperOptions& o) -> std::unique_ptr<Stepper> {
-        return std::make_unique<CoordinateRk4Stepper>(Chart::Quaternion, m, o);
-      });
-}
-
-// Registers at load time when the library is shared; register_extra_steppers() does the same
-// explicitly for programs that cannot rely on that (a static library drops unreferenced objects).
-struct Registrar {
-  Registrar() { register_all(); }
-};
-const Registrar registrar;
-
 }  // namespace
 
-void register_extra_steppers() {
-  register_all();
+namespace detail {
+
+std::unique_ptr<Stepper> make_rk4_euler_angles_stepper(const Model& model,
+                                                       const StepperOptions& opt) {
+  return std::make_unique<CoordinateRk4Stepper>(Chart::EulerZYX, model, opt);
 }
 
+std::unique_ptr<Stepper> make_rk4_quaternion_stepper(const Model& model,
+                                                     const StepperOptions& opt) {
+  return std::make_unique<CoordinateRk4Stepper>(Chart::Quaternion, model, opt);
+}
+
+}  // namespace detail
 }  // namespace se3

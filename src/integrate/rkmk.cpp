@@ -4,8 +4,9 @@
 //   xi_i = h sum_j a_ij Kxi_j,  q_i = q + h sum_j a_ij qdot_j,  v_i = v + h sum_j a_ij a_j
 //   f_i  = f exp(xi_i),         a_i = ABA(f_i, q_i, v_i),       Kxi_i = dexp_inv(-xi_i) V0_i
 // and the step ends at f exp(h sum_i b_i Kxi_i) with q and v combined by b. The joint part is
-// the plain Runge-Kutta method. dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi) xidot,
-// taken from its series for methods of order <= 4 (see series_dexp_).
+// the plain Runge-Kutta method (every joint has nq = nv = 1: q advances with the joint rates, the
+// entries of v after the base's). dexp_inv(-xi) is the body-frame form: f^-1 fdot = dexp(-xi)
+// xidot, taken from its series for methods of order <= 4 (see series_dexp_).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -92,7 +93,7 @@ class RkmkStepper final : public Stepper {
                                   std::to_string(kMaxStages) + " stages");
     }
     series_dexp_ = tab_.order <= 4;
-    chain_ = !adaptive();
+    chain_ = tab_.fast_path && !adaptive();
     chain_c_.assign(s_, 0.0);
     for (int i = 1; i < s_; ++i) {
       const auto& ai = tab_.a[i];
@@ -100,16 +101,16 @@ class RkmkStepper final : public Stepper {
       if (static_cast<int>(ai.size()) == i) chain_c_[i] = ai[i - 1];
     }
     vbuf_[0] = vbuf_[1] = sum_v_ = VecX::Zero(model.nv);
-    sum_q_ = VecX::Zero(model.n);
+    sum_q_ = VecX::Zero(model.nq);
     kxi_.assign(s_, Vec6::Zero());
     kv_.assign(s_, VecX::Zero(model.nv));
     vs_.assign(s_, VecX::Zero(model.nv));
-    qi_ = VecX::Zero(model.n);
+    qi_ = VecX::Zero(model.nq);
     start_ = State(model);
     trial_ = State(model);
     cache_end_ = State(model);
     cache_tau_ = VecX::Zero(model.nv);
-    err_q_ = VecX::Zero(model.n);
+    err_q_ = VecX::Zero(model.nq);
     err_v_ = VecX::Zero(model.nv);
   }
 
@@ -138,16 +139,15 @@ class RkmkStepper final : public Stepper {
   // dropped, so no stage is stored and no combination pass is left at the end.
   StepInfo step_chain(State& x, const VecX& tau, double h) {
     const bool fl = model_.floating;
-    const int n = model_.n, nv = model_.nv, off = nv - n;
+    const int n = model_.nq, nv = model_.nv, off = model_.nv_base();
     const double *xv = x.v.data(), *xq = x.q.data();
     double *sv = sum_v_.data(), *sq = sum_q_.data();
     const VecX *vi = &x.v, *qi = &x.q;  // the stage point's rates and positions
     Vec6 xi = Vec6::Zero(), sum_xi = Vec6::Zero();
     SE3 fi;  // the stage's base pose (free base)
     for (int i = 0;; ++i) {
-      // The base's slope reads only the stage point, so it is formed before the stage's ABA call:
-      // 0.06-0.15 ABA less per satellite step than after it (paired bench_step runs, 12 of 16
-      // pairs lower). Moving the end pose's exp before the last call too gained nothing.
+      // The base's slope reads only the stage point, so it is formed before the stage's ABA call
+      // (measured faster: docs/performance.md).
       Vec6 kxi = Vec6::Zero();
       if (fl) {
         kxi = i == 0 ? vi->head<6>()
@@ -187,36 +187,25 @@ class RkmkStepper final : public Stepper {
   // sum = (add ? sum : 0) + b z and next = x + c z, in one pass over z.
   static void feed(int n, const double* z, double b, double* sum, bool add, double c,
                    const double* x, double* next) {
-    using detail::load2;
-    using detail::store2;
-    int k = 0;
     if (add) {
-      for (; k + 2 <= n; k += 2) {
-        const detail::v2d zk = load2(z + k);
-        store2(sum + k, load2(sum + k) + b * zk);
-        store2(next + k, load2(x + k) + c * zk);
+      for (int k = 0; k < n; ++k) {
+        const double zk = z[k];
+        sum[k] += b * zk;
+        next[k] = x[k] + c * zk;
       }
-      if (k < n) sum[k] += b * z[k];
     } else {
-      for (; k + 2 <= n; k += 2) {
-        const detail::v2d zk = load2(z + k);
-        store2(sum + k, b * zk);
-        store2(next + k, load2(x + k) + c * zk);
+      for (int k = 0; k < n; ++k) {
+        const double zk = z[k];
+        sum[k] = b * zk;
+        next[k] = x[k] + c * zk;
       }
-      if (k < n) sum[k] = b * z[k];
     }
-    if (k < n) next[k] = x[k] + c * z[k];
   }
 
   // y += (add ? sum : 0) + b z.
   static void add_sum(int n, double b, const double* z, const double* sum, bool add, double* y) {
     if (!add) return detail::axpy(n, b, z, y);
-    int k = 0;
-    for (; k + 2 <= n; k += 2) {
-      detail::store2(y + k,
-                     detail::load2(y + k) + (detail::load2(sum + k) + b * detail::load2(z + k)));
-    }
-    if (k < n) y[k] += sum[k] + b * z[k];
+    for (int k = 0; k < n; ++k) y[k] += sum[k] + b * z[k];
   }
 
   // The stages of a step of size h from x: kv_, vs_ and kxi_ (stage 0 skipped when
@@ -246,7 +235,7 @@ class RkmkStepper final : public Stepper {
   // v = x.v + h sum_t a_t kv_[j_t] and q = x.q + h sum_t a_t qdot_[j_t] over the terms (one pass
   // over each vector); returns the base's xi = h sum_t a_t kxi_[j_t]. v and q may be x's own.
   Vec6 advance(const State& x, const std::vector<Term>& terms, double h, double* v, double* q) {
-    const int n = model_.n, nv = model_.nv, off = nv - n;
+    const int n = model_.nq, nv = model_.nv, off = model_.nv_base();
     const int T = static_cast<int>(terms.size());
     double c[kMaxStages];
     const double* a[kMaxStages];
@@ -275,7 +264,8 @@ class RkmkStepper final : public Stepper {
 
   // The base pose at a stage, x.base exp(xi). Without a constraint hook only ABA sees it, and
   // ABA depends on the base pose only through its rotation (the direction of gravity in the base
-  // frame, dynamics.h): then the position is left as it is, and with zero gravity the pose too.
+  // frame: dynamics.h's contract, tested by gtest_dynamics): then the position is left as it is,
+  // and with zero gravity the pose too.
   SE3 stage_pose(const SE3& base, const Vec6& xi) const {
     if (acceleration_hook()) return base * exp_se3(xi);
     if (model_.gravity.isZero(0.0)) return base;
@@ -299,7 +289,7 @@ class RkmkStepper final : public Stepper {
   // Returns the scaled RMS error norm (adaptive tableaus; 0 otherwise).
   double attempt(const State& x, const VecX& tau, double h, State& y, StepInfo& info) {
     const bool fl = model_.floating;
-    const int n = model_.n;
+    const int n = model_.nq;
     stages(x, tau, h, info);
     const Vec6 xi = combine(x, h, y);
     if (tab_.b_err.empty()) return 0;

@@ -44,66 +44,11 @@
 #include <vector>
 
 #include "se3_sim/integrate.h"
+#include "steppers.h"
 
 namespace se3 {
 
 namespace {
-
-int axis_of(JointType t) {
-  return t == JointType::Revolute ? 2 : 5;
-}
-
-// The coupling block Q(a, l) of dexp([a; l]) = [J(a), 0; Q, J(a)] (the series sum of
-// ad^k / (k+1)!), with the coefficients
-//   c1 = (t - sin t) / t^3, c2 = (t^2/2 + cos t - 1) / t^4, c3 = (2t - 3 sin t + t cos t) / (2 t^5)
-// summed as series below t = 1. Kept here because the discrete momenta must satisfy
-// dexp(xi) = Ad_exp(xi) dexp(-xi) to rounding for the momentum to be conserved exactly, and
-// lie.cpp's dexp_se3 had a wrong c3 (error O(|a|^3 |l|), found while doing issue 6).
-Mat3 coupling(const Vec3& a, const Vec3& l) {
-  const double t = a.norm(), t2 = t * t;
-  double c1, c2, c3;
-  if (t < 1.0) {
-    // c1 = sum_{k>=1} (-1)^(k+1) t^(2k-2) / (2k+1)!, c2 = sum_{k>=2} (-1)^k t^(2k-4) / (2k)!,
-    // c3 = sum_{k>=2} (-1)^k (k-1) t^(2k-4) / (2k+1)!.
-    c1 = c2 = c3 = 0;
-    double f2k = 2.0, pw = 1.0, p4 = 1.0;  // (2k)!, t^(2k-2), t^(2k-4)
-    for (int k = 1; k <= 13; ++k) {
-      const double f2k1 = f2k * (2 * k + 1);
-      const double sgn = (k % 2 == 0) ? 1.0 : -1.0;  // (-1)^k
-      c1 -= sgn * pw / f2k1;
-      if (k >= 2) {
-        c2 += sgn * p4 / f2k;
-        c3 += sgn * (k - 1) * p4 / f2k1;
-        p4 *= t2;
-      }
-      pw *= t2;
-      f2k = f2k1 * (2 * k + 2);
-    }
-  } else {
-    const double s = std::sin(t), c = std::cos(t);
-    c1 = (t - s) / (t2 * t);
-    c2 = (0.5 * t2 + c - 1.0) / (t2 * t2);
-    c3 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t);
-  }
-  const Mat3 A = hat(a), L = hat(l);
-  const Mat3 AL = A * L, LA = L * A, ALA = AL * A;
-  return 0.5 * L + c1 * (AL + LA + ALA) + c2 * (A * AL + LA * A - 3.0 * ALA) +
-         c3 * (ALA * A + A * ALA);
-}
-
-// dexp(xi) and dexp(xi)^-1 with the coupling above (block triangular inverse).
-Mat6 dexp_of(const Vec6& xi) {
-  const Mat3 J = left_jacobian_so3(xi.head<3>());
-  Mat6 m;
-  m << J, Mat3::Zero(), coupling(xi.head<3>(), xi.tail<3>()), J;
-  return m;
-}
-Mat6 dexp_inv_of(const Vec6& xi) {
-  const Mat3 Ji = left_jacobian_inv_so3(xi.head<3>());
-  Mat6 m;
-  m << Ji, Mat3::Zero(), -Ji * coupling(xi.head<3>(), xi.tail<3>()) * Ji, Ji;
-  return m;
-}
 
 class VariationalStepper final : public Stepper {
  public:
@@ -111,7 +56,6 @@ class VariationalStepper final : public Stepper {
       : Stepper(model, opt),
         end_data_(model),
         nv_(model.nv),
-        off_(model.floating ? 6 : 0),
         D0_(MatX::Zero(nv_, nv_)),
         D1_(MatX::Zero(nv_, nv_)),
         A_(MatX::Zero(nv_, nv_)),
@@ -126,24 +70,17 @@ class VariationalStepper final : public Stepper {
         dT_(VecX::Zero(nv_)),
         pas_(VecX::Zero(nv_)),
         zero_(VecX::Zero(nv_)),
-        q1_(VecX::Zero(model.n)),
-        damp_(VecX::Zero(nv_)),
+        q1_(VecX::Zero(model.nq)),
         g_(VecX::Zero(nv_)),
         wt_(VecX::Zero(nv_)),
         J_(MatX::Zero(nv_, nv_)),
         lu_(nv_),
-        V_(model.n + 1, Vec6::Zero()),
         P_(model.n + 1, Vec6::Zero()),
         cache_end_(model),
         cache_tau_(VecX::Zero(nv_)),
         dv_(VecX::Zero(nv_)) {
-    if (opt_.passive_forces) {
-      for (int i = 1; i <= model.n; ++i) damp_[off_ + i - 1] = model.damping[i];
-    }
-    has_friction_ = false;
-    if (opt_.passive_forces) {
-      for (int i = 1; i <= model.n; ++i) has_friction_ = has_friction_ || model.friction[i] != 0;
-    }
+    data_.reserve_crba(model);  // crba runs inside every step
+    end_data_.reserve_crba(model);
     has_gravity_ = model.gravity.squaredNorm() > 0;
   }
 
@@ -154,7 +91,7 @@ class VariationalStepper final : public Stepper {
   StepInfo step(State& x, const VecX& tau, double h) override {
     StepInfo info;
     const Model& m = model_;
-    const int n = m.n;
+    const int n = m.nq;
     const bool fl = m.floating;
     // ---- start point: D(q_k), p_k, Q(k) (reused from the previous step's end when possible)
     const bool continued = cache_valid_ && same(x, cache_end_) && tau == cache_tau_;
@@ -215,7 +152,8 @@ class VariationalStepper final : public Stepper {
           J_.col(j) = (w_new_ - wt_ - g_) / eps;
         }
         lu_.compute(J_);
-        w_ -= lu_.solve(g_);
+        wt_ = lu_.solve(g_);  // into a vector of its own: no temporary
+        w_ -= wt_;
       }
     }
     if (!converged) {
@@ -240,15 +178,9 @@ class VariationalStepper final : public Stepper {
     ++info.evaluations;
     if (fl) {
       const Vec6 pb = p1_.head<6>();
-      p1_.head<6>().noalias() = dexp_inv_of(-xi).transpose() * pb;
+      p1_.head<6>().noalias() = dexp_inv_se3(-xi).transpose() * pb;
     }
-    pas_.setZero();
-    for (int k = off_; k < nv_; ++k) pas_[k] = -damp_[k] * w_[k];
-    if (has_friction_) {
-      rhs_.setZero();
-      friction(w_, rhs_);
-      pas_ += rhs_;
-    }
+    passive_.apply(nullptr, w_.data(), pas_.data());
     p1_ += h2 * (Q1_ + tau + pas_);
     p1_.tail(n) += h2 * dT_.tail(n);
     llt_.compute(D1_);
@@ -283,20 +215,21 @@ class VariationalStepper final : public Stepper {
                        StepInfo& info) {
     ++info.evaluations;
     const double h2 = 0.5 * h;
-    q1_ = x.q + h * w.tail(model_.n);
+    q1_ = x.q + h * w.tail(model_.nq);
     D1_ = crba(model_, end_data_, x.base, q1_);
     A_ = 0.5 * (D0_ + D1_);
-    for (int k = off_; k < nv_; ++k) A_(k, k) += h2 * damp_[k];
+    // Linear damping taken implicitly into the matrix; friction explicitly.
+    A_.diagonal() += h2 * passive_.damping();
     kinetic_gradient(data_, w, dT_);
     rhs_ = p0_ + h2 * (Q0_ + tau + dT_);
-    if (has_friction_) {
-      friction(w, pas_);
+    if (passive_.has_friction()) {
+      passive_.friction(w.data(), pas_.data());
       rhs_ += h2 * pas_;
     }
     if (model_.floating) {
       const Vec6 xi = h * w.head<6>();
       const Vec6 mu = rhs_.head<6>();
-      rhs_.head<6>().noalias() = dexp_of(xi).transpose() * mu;
+      rhs_.head<6>().noalias() = dexp_se3(xi).transpose() * mu;
     }
     llt_.compute(A_);
     if (llt_.info() != Eigen::Success) {
@@ -321,63 +254,40 @@ class VariationalStepper final : public Stepper {
     out = -rnea(model_, d, base, q, zero_, zero_);
   }
 
-  // Regularized Coulomb friction -f tanh(qdot / eps) at rates w (damping is handled apart).
-  void friction(const VecX& w, VecX& out) const {
-    out.setZero();
-    const double inv_eps = 1.0 / opt_.friction_eps;
-    for (int i = 1; i <= model_.n; ++i) {
-      const double f = model_.friction[i];
-      if (f != 0) out[off_ + i - 1] = -f * std::tanh(w[off_ + i - 1] * inv_eps);
-    }
-  }
-
   // dT/dq at the configuration whose joint transforms are in d.Xup, at generalized velocity w
-  // (zero on the base part).
-  void kinetic_gradient(const Data& d, const VecX& w, VecX& out) {
+  // (zero on the base part); the body twists go to d.V.
+  void kinetic_gradient(Data& d, const VecX& w, VecX& out) {
     const Model& m = model_;
     out.setZero();
-    if (m.floating) {
-      V_[0] = w.head<6>();
-    } else {
-      V_[0].setZero();
-    }
-    P_[0] = m.inertia[0] * V_[0];
-    for (int i = 1; i <= m.n; ++i) {
-      V_[i] = act_inv_motion(d.Xup[i], V_[m.parent[i]]);
-      V_[i][axis_of(m.joint_type[i])] += w[off_ + i - 1];
-      P_[i] = m.inertia[i] * V_[i];
-    }
+    body_twists(m, d, w);
+    for (int i = 0; i <= m.n; ++i) P_[i] = m.inertia[i] * d.V[i];
     for (int i = m.n; i >= 1; --i) {
-      Vec6 S = Vec6::Zero();
-      S[axis_of(m.joint_type[i])] = 1.0;
-      out[off_ + i - 1] = P_[i].dot(cross_motion(V_[i], S));
+      const Vec6 S = Vec6::Unit(m.joints[i].axis());  // a one-dof joint: S = e_k
+      out[m.idx_v(i)] = P_[i].dot(cross_motion(d.V[i], S));
       P_[m.parent[i]] += act_force(d.Xup[i], P_[i]);
     }
   }
 
   Data end_data_;
-  int nv_, off_;
+  int nv_;
   MatX D0_, D1_, A_;
   Eigen::LLT<MatX> llt_;
-  VecX p0_, p1_, Q0_, Q1_, w_, w_new_, rhs_, dT_, pas_, zero_, q1_, damp_, g_, wt_;
+  VecX p0_, p1_, Q0_, Q1_, w_, w_new_, rhs_, dT_, pas_, zero_, q1_, g_, wt_;
   MatX J_;
   Eigen::PartialPivLU<MatX> lu_;
-  std::vector<Vec6> V_, P_;
+  std::vector<Vec6> P_;  // subtree momenta (kinetic_gradient)
   State cache_end_;
   VecX cache_tau_;
   VecX dv_;
   double last_h_ = 0;
   bool cache_valid_ = false;
-  bool has_friction_ = false;
   bool has_gravity_ = false;
 };
 
 }  // namespace
 
-// Declared where the steppers are registered (baseline.cpp, register_extra_steppers).
-std::unique_ptr<Stepper> make_variational_stepper(const Model& model, const StepperOptions& opt);
-
-std::unique_ptr<Stepper> make_variational_stepper(const Model& model, const StepperOptions& opt) {
+std::unique_ptr<Stepper> detail::make_variational_stepper(const Model& model,
+                                                          const StepperOptions& opt) {
   return std::make_unique<VariationalStepper>(model, opt);
 }
 

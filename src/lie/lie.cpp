@@ -5,16 +5,14 @@
 #include <cmath>
 #include <cstring>
 
-#include "simd.h"
-
 namespace se3 {
 namespace {
 
 // Below t = 1 (t^2 < kSeries2) the trigonometric coefficients are evaluated by their Taylor
 // series in t^2, which need neither sqrt nor division and are exact where the closed forms
-// cancel: (t - sin t)/t^3 loses about log10(6/t^2) digits, and the coupling coefficients of dexp
-// lost up to 100 ulp of dexp at t = 0.1, the former switch. From t = 1 on the cancellation costs
-// at most two digits of a coefficient that the maps multiply by t^3 or more, and dexp stays
+// cancel: (t - sin t)/t^3 loses about log10(6/t^2) digits, and the closed-form coupling
+// coefficients of dexp lose up to 100 ulp of dexp near t = 0.1. From t = 1 on the cancellation
+// costs at most two digits of a coefficient that the maps multiply by t^3 or more, and dexp stays
 // within 1e-15 (gtest_lie). Each series stops where the next term is below 1e-17 relative at
 // t = 1.
 constexpr double kSeries2 = 1.0;
@@ -318,41 +316,28 @@ Inertia Inertia::from_com(double mass, const Vec3& com, const Mat3& I_com) {
 // Expressed in the frame where the body sits at f: x' = R x + p. With hat(a) hat(b) =
 // b a^T - (a.b) 1, the parallel-axis terms -hat(p) hat(Rh) - hat(Rh) hat(p) - m hat(p)^2 become
 // (2 p.Rh + m |p|^2) 1 - (Rh p^T + p Rh^T + m p p^T): no 3x3 products beyond R I R^T, whose
-// symmetric result needs only its upper triangle. Column by column, each 3-vector as an (x, y)
-// pair and a z: Z = R I, then I' = Z R^T; the result is written (add = false) or added (add = true)
-// to `out` entry by entry, scalar stores only, so that no wide load has to wait on them. A hot path
-// of crba and minv.
+// symmetric result needs only its upper triangle. Z = R I, then I' = Z R^T; the result is written
+// (add = false) or added (add = true) to `out` entry by entry. A hot path of crba and minv.
 namespace {
-
-using detail::load2;
-using detail::v2d;
 
 template <bool add>
 void transform_inertia(const Inertia& in, const SE3& f, Inertia& out) {
   const double m = in.m;
   const Vec3& h = in.h;
-  const double* R = f.R.data();  // column-major
+  const double* R = f.R.data();  // column-major: R(r, c) = R[r + 3 c]
   const double* J = in.I.data();
-  const v2d r0 = load2(R), r1 = load2(R + 3), r2 = load2(R + 6);
-  const double r0z = R[2], r1z = R[5], r2z = R[8];
-  const v2d gxy = r0 * h[0] + r1 * h[1] + r2 * h[2];
-  const double gz = r0z * h[0] + r1z * h[1] + r2z * h[2];
-  v2d Zxy[3];
-  double Zz[3];
-  for (int c = 0; c < 3; ++c) {
-    const double i0 = J[3 * c], i1 = J[3 * c + 1], i2 = J[3 * c + 2];
-    Zxy[c] = r0 * i0 + r1 * i1 + r2 * i2;
-    Zz[c] = r0z * i0 + r1z * i1 + r2z * i2;
+  double g[3], Z[3][3];  // g = R h, Z = R I (Z[r][c])
+  for (int r = 0; r < 3; ++r) {
+    const double r0 = R[r], r1 = R[r + 3], r2 = R[r + 6];
+    g[r] = r0 * h[0] + r1 * h[1] + r2 * h[2];
+    for (int c = 0; c < 3; ++c) Z[r][c] = r0 * J[3 * c] + r1 * J[3 * c + 1] + r2 * J[3 * c + 2];
   }
   const double px = f.p[0], py = f.p[1], pz = f.p[2];
-  const double gx = gxy[0], gy = gxy[1];
+  const double gx = g[0], gy = g[1], gz = g[2];
   const double d = 2.0 * (px * gx + py * gy + pz * gz) + m * (px * px + py * py + pz * pz);
   const double w0 = gx + 0.5 * m * px, w1 = gy + 0.5 * m * py, w2 = gz + 0.5 * m * pz;
-  // (R I R^T)(:, c) = sum_k Z(:, k) R(c, k).
-  const v2d c1 = Zxy[0] * R[1] + Zxy[1] * R[4] + Zxy[2] * R[7];  // rows 0, 1 of column 1
-  const v2d c2 = Zxy[0] * R[2] + Zxy[1] * R[5] + Zxy[2] * R[8];  // rows 0, 1 of column 2
-  const double a00 = Zxy[0][0] * R[0] + Zxy[1][0] * R[3] + Zxy[2][0] * R[6];
-  const double a22 = Zz[0] * R[2] + Zz[1] * R[5] + Zz[2] * R[8];
+  // (R I R^T)(r, c) = sum_k Z(r, k) R(c, k).
+  auto rir = [&](int r, int c) { return Z[r][0] * R[c] + Z[r][1] * R[c + 3] + Z[r][2] * R[c + 6]; };
   auto put = [](double& dst, double v) {
     if (add) {
       dst += v;
@@ -365,12 +350,12 @@ void transform_inertia(const Inertia& in, const SE3& f, Inertia& out) {
   put(out.h[1], gy + m * py);
   put(out.h[2], gz + m * pz);
   double* o = out.I.data();
-  const double i01 = c1[0] - (w0 * py + px * w1);
-  const double i02 = c2[0] - (w0 * pz + px * w2);
-  const double i12 = c2[1] - (w1 * pz + py * w2);
-  put(o[0], a00 - 2 * w0 * px + d);
-  put(o[4], c1[1] - 2 * w1 * py + d);
-  put(o[8], a22 - 2 * w2 * pz + d);
+  const double i01 = rir(0, 1) - (w0 * py + px * w1);
+  const double i02 = rir(0, 2) - (w0 * pz + px * w2);
+  const double i12 = rir(1, 2) - (w1 * pz + py * w2);
+  put(o[0], rir(0, 0) - 2 * w0 * px + d);
+  put(o[4], rir(1, 1) - 2 * w1 * py + d);
+  put(o[8], rir(2, 2) - 2 * w2 * pz + d);
   put(o[1], i01), put(o[3], i01);
   put(o[2], i02), put(o[6], i02);
   put(o[5], i12), put(o[7], i12);
@@ -414,25 +399,23 @@ Mat3 orthonormalize(const Mat3& m) {
 }
 
 // With columns c_k of R and G = R^T R (G_jk = c_j . c_k), column k of the result is
-// 1.5 c_k - 0.5 sum_j c_j G_jk; each column as an (x, y) pair and a z.
+// 1.5 c_k - 0.5 sum_j c_j G_jk.
 Mat3 reorthonormalize(const Mat3& R) {
-  const double* r = R.data();  // column-major
-  const v2d c[3] = {load2(r), load2(r + 3), load2(r + 6)};
-  const double z[3] = {r[2], r[5], r[8]};
+  const double* r = R.data();  // column-major: column k is r[3k..3k+2]
   double G[3][3];
   for (int j = 0; j < 3; ++j) {
     for (int k = j; k < 3; ++k) {
-      const v2d p = c[j] * c[k];
-      G[j][k] = G[k][j] = p[0] + p[1] + z[j] * z[k];
+      G[j][k] = G[k][j] =
+          r[3 * j] * r[3 * k] + r[3 * j + 1] * r[3 * k + 1] + r[3 * j + 2] * r[3 * k + 2];
     }
   }
   Mat3 out;
   double* o = out.data();
   for (int k = 0; k < 3; ++k) {
-    const v2d xy = 1.5 * c[k] - 0.5 * (c[0] * G[0][k] + c[1] * G[1][k] + c[2] * G[2][k]);
-    o[3 * k] = xy[0];
-    o[3 * k + 1] = xy[1];
-    o[3 * k + 2] = 1.5 * z[k] - 0.5 * (z[0] * G[0][k] + z[1] * G[1][k] + z[2] * G[2][k]);
+    for (int i = 0; i < 3; ++i) {
+      o[3 * k + i] =
+          1.5 * r[3 * k + i] - 0.5 * (r[i] * G[0][k] + r[3 + i] * G[1][k] + r[6 + i] * G[2][k]);
+    }
   }
   return out;
 }

@@ -1,5 +1,9 @@
-// Two doubles in one SSE2 register, for the hot paths that carry pairs of numbers through the
-// same arithmetic (GCC/Clang vector extension: plain SSE2, no -march needed). Internal header.
+// Two doubles in one register, for the hot paths that carry pairs of numbers through the same
+// arithmetic. With GCC and Clang, v2d is their portable vector extension: SSE2 on x86-64 (no
+// -march needed), NEON on arm64, pairs of scalars elsewhere. SE3_SIM_SCALAR_PAIRS (or another
+// compiler) makes it a plain struct of two doubles: the same arithmetic lane by lane, the
+// portable fallback and the scalar reference the SIMD pairing is measured against
+// (docs/performance.md). Internal header.
 #pragma once
 
 #include <cstring>
@@ -7,7 +11,49 @@
 namespace se3 {
 namespace detail {
 
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(SE3_SIM_SCALAR_PAIRS)
 typedef double v2d __attribute__((vector_size(16)));
+#else
+#define SE3_SIM_PAIRS_ARE_SCALAR 1
+struct v2d {
+  double v[2];
+  double operator[](int i) const { return v[i]; }
+  double& operator[](int i) { return v[i]; }
+  v2d& operator+=(const v2d& o) {
+    v[0] += o.v[0], v[1] += o.v[1];
+    return *this;
+  }
+  v2d& operator-=(const v2d& o) {
+    v[0] -= o.v[0], v[1] -= o.v[1];
+    return *this;
+  }
+};
+inline v2d operator+(v2d a, v2d b) {
+  return v2d{{a.v[0] + b.v[0], a.v[1] + b.v[1]}};
+}
+inline v2d operator-(v2d a, v2d b) {
+  return v2d{{a.v[0] - b.v[0], a.v[1] - b.v[1]}};
+}
+inline v2d operator*(v2d a, v2d b) {
+  return v2d{{a.v[0] * b.v[0], a.v[1] * b.v[1]}};
+}
+inline v2d operator*(double c, v2d a) {
+  return v2d{{c * a.v[0], c * a.v[1]}};
+}
+inline v2d operator*(v2d a, double c) {
+  return v2d{{a.v[0] * c, a.v[1] * c}};
+}
+inline v2d operator-(v2d a) {
+  return v2d{{-a.v[0], -a.v[1]}};
+}
+#endif
+/// {a, b} (a vector-extension initializer reads the same).
+inline v2d pair(double a, double b) {
+  v2d r;
+  r[0] = a;
+  r[1] = b;
+  return r;
+}
 
 /// Two consecutive doubles, any alignment.
 inline v2d load2(const double* p) {
@@ -19,46 +65,31 @@ inline void store2(double* p, v2d x) {
   std::memcpy(p, &x, sizeof x);
 }
 
-// Loops over the short vectors of a time step (a few to a few hundred entries), two entries per
-// register and no set-up beyond the loop: Eigen's dynamic-size expressions and memcpy cost more in
-// set-up than in arithmetic at these sizes. Outputs may alias inputs entry for entry.
+// Loops over the short vectors of a time step (a few to a few hundred entries) with no set-up
+// beyond the loop: Eigen's dynamic-size expressions and memcpy cost more in set-up than in
+// arithmetic at these sizes. Plain scalar loops: pairing their entries in v2d registers saved
+// nothing measurable (docs/performance.md). Outputs may alias inputs entry for entry.
 
 /// y = x.
 inline void copy(int n, const double* x, double* y) {
-  int k = 0;
-  for (; k + 2 <= n; k += 2) store2(y + k, load2(x + k));
-  if (k < n) y[k] = x[k];
+  for (int k = 0; k < n; ++k) y[k] = x[k];
 }
 /// y += c x.
 inline void axpy(int n, double c, const double* x, double* y) {
-  int k = 0;
-  for (; k + 2 <= n; k += 2) store2(y + k, load2(y + k) + c * load2(x + k));
-  if (k < n) y[k] += c * x[k];
+  for (int k = 0; k < n; ++k) y[k] += c * x[k];
 }
 
 /// Whether all n entries are finite: x - x is 0 for a finite x and NaN for an infinity or a NaN,
 /// and a sum with a NaN in it is NaN (no early exit).
 inline bool all_finite(int n, const double* x) {
-  v2d s = {0.0, 0.0};
-  int k = 0;
-  for (; k + 2 <= n; k += 2) {
-    const v2d a = load2(x + k);
-    s += a - a;
-  }
-  double r = s[0] + s[1];
-  if (k < n) r += x[k] - x[k];
-  return r == 0;
+  double s = 0;
+  for (int k = 0; k < n; ++k) s += x[k] - x[k];
+  return s == 0;
 }
 /// y = x + sum_t c[t] z[t] over the M < 5 terms t, in one pass.
 template <int M>
 inline void add_terms(int n, const double* x, const double* c, const double* const* z, double* y) {
-  int k = 0;
-  for (; k + 2 <= n; k += 2) {
-    v2d s = load2(x + k);
-    for (int t = 0; t < M; ++t) s += c[t] * load2(z[t] + k);
-    store2(y + k, s);
-  }
-  if (k < n) {
+  for (int k = 0; k < n; ++k) {
     double s = x[k];
     for (int t = 0; t < M; ++t) s += c[t] * z[t][k];
     y[k] = s;

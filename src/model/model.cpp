@@ -7,6 +7,55 @@
 
 namespace se3 {
 
+JointModel::JointModel(JointType t) : type(t) {
+  nq = (t == JointType::Revolute || t == JointType::Prismatic) ? 1 : 0;
+  nv = t == JointType::Free ? 6 : nq;
+}
+
+Eigen::Matrix<double, 6, Eigen::Dynamic> JointModel::motion_subspace() const {
+  Eigen::Matrix<double, 6, Eigen::Dynamic> S =
+      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, nv);
+  if (type == JointType::Free) S.setIdentity();
+  if (axis() >= 0) S(axis(), 0) = 1;
+  return S;
+}
+
+SE3 JointModel::transform(const SE3& X_tree, const double* q) const {
+  switch (type) {
+    case JointType::Revolute:
+      return X_tree * SE3(exp_so3(Vec3(0, 0, q[0])), Vec3::Zero());
+    case JointType::Prismatic:
+      return X_tree * SE3(Mat3::Identity(), Vec3(0, 0, q[0]));
+    default:
+      return X_tree;
+  }
+}
+
+const char* JointModel::name() const {
+  switch (type) {
+    case JointType::Revolute:
+      return "revolute";
+    case JointType::Prismatic:
+      return "prismatic";
+    case JointType::Free:
+      return "free";
+    case JointType::Fixed:
+      return "fixed";
+  }
+  return "unknown";
+}
+
+const char* JointModel::urdf_type(bool limited) const {
+  switch (type) {
+    case JointType::Revolute:
+      return limited ? "revolute" : "continuous";
+    case JointType::Prismatic:
+      return "prismatic";
+    default:
+      return nullptr;
+  }
+}
+
 int Model::joint_index(const std::string& joint) const {
   for (int i = 1; i <= n; ++i) {
     if (joint_name[i] == joint) return i;
@@ -14,9 +63,14 @@ int Model::joint_index(const std::string& joint) const {
   return -1;
 }
 
+std::string frame_name(const std::string& urdf_link) {
+  return !urdf_link.empty() && urdf_link[0] == '/' ? urdf_link.substr(1) : urdf_link;
+}
+
 int Model::link_index(const std::string& link) const {
+  const std::string name = frame_name(link);
   for (size_t k = 0; k < links.size(); ++k) {
-    if (links[k].name == link) return static_cast<int>(k);
+    if (links[k].name == name) return static_cast<int>(k);
   }
   return -1;
 }
@@ -28,7 +82,15 @@ double Model::total_mass() const {
 }
 
 void Model::finalize() {
-  nv = n + (floating ? 6 : 0);
+  joints.resize(n + 1);
+  joints[0] = JointModel(floating ? JointType::Free : JointType::Fixed);
+  nq = nv = 0;
+  for (JointModel& j : joints) {
+    j.idx_q = nq;
+    j.idx_v = nv;
+    nq += j.nq;
+    nv += j.nv;
+  }
   children.assign(n + 1, {});
   for (int i = 1; i <= n; ++i) children[parent[i]].push_back(i);
   subtree_end.resize(n + 1);
@@ -43,7 +105,7 @@ void Model::start_with_base(const std::string& root, const Inertia& base_inertia
   root_link = root;
   parent = {-1};
   X_tree = {SE3()};
-  joint_type = {JointType::Revolute};
+  joints = {JointModel(JointType::Fixed)};
   inertia = {base_inertia};
   body_name = {root};
   joint_name = {""};
@@ -55,13 +117,52 @@ void Model::start_with_base(const std::string& root, const Inertia& base_inertia
   friction = {0};
 }
 
+int Model::add_body(int parent_body, JointType type, const SE3& X, const Inertia& I,
+                    const std::string& body, const std::string& joint) {
+  const double inf = std::numeric_limits<double>::infinity();
+  parent.push_back(parent_body);
+  X_tree.push_back(X);
+  joints.emplace_back(type);
+  inertia.push_back(I);
+  body_name.push_back(body);
+  joint_name.push_back(joint);
+  lower.push_back(-inf);
+  upper.push_back(inf);
+  effort.push_back(inf);
+  velocity.push_back(inf);
+  damping.push_back(0);
+  friction.push_back(0);
+  return ++n;
+}
+
 void Model::validate() const {
   const size_t nb = static_cast<size_t>(n) + 1;
-  if (parent.size() != nb || X_tree.size() != nb || joint_type.size() != nb ||
-      inertia.size() != nb || joint_name.size() != nb || lower.size() != nb || upper.size() != nb ||
-      effort.size() != nb || damping.size() != nb || friction.size() != nb ||
-      velocity.size() != nb || body_name.size() != nb) {
+  if (parent.size() != nb || X_tree.size() != nb || joints.size() != nb || inertia.size() != nb ||
+      joint_name.size() != nb || lower.size() != nb || upper.size() != nb || effort.size() != nb ||
+      damping.size() != nb || friction.size() != nb || velocity.size() != nb ||
+      body_name.size() != nb) {
     throw ModelError("model '" + name + "': per-body arrays do not have n + 1 entries");
+  }
+  if (joints[0].type != (floating ? JointType::Free : JointType::Fixed)) {
+    throw ModelError("model '" + name +
+                     "': the base's joint does not match `floating` (finalize())");
+  }
+  int nq_sum = 0, nv_sum = 0;
+  for (int i = 0; i <= n; ++i) {
+    const JointModel& j = joints[i];
+    if (i > 0 && j.axis() < 0) {
+      throw ModelError("joint '" + joint_name[i] + "': a " + j.name() +
+                       " joint can only be the base's");
+    }
+    if (j.idx_q != nq_sum || j.idx_v != nv_sum || JointModel(j.type).nq != j.nq ||
+        JointModel(j.type).nv != j.nv) {
+      throw ModelError("model '" + name + "': joint coordinates out of order (finalize())");
+    }
+    nq_sum += j.nq;
+    nv_sum += j.nv;
+  }
+  if (nq_sum != nq || nv_sum != nv) {
+    throw ModelError("model '" + name + "': nq or nv does not match the joints (finalize())");
   }
   for (int i = 1; i <= n; ++i) {
     if (parent[i] < 0 || parent[i] >= i) {
@@ -73,7 +174,8 @@ void Model::validate() const {
   std::vector<Inertia> Ic(inertia);
   for (int i = n; i >= 1; --i) Ic[parent[i]] += Ic[i].transformed(X_tree[i]);
   for (int i = 1; i <= n; ++i) {
-    const double about_axis = joint_type[i] == JointType::Revolute ? Ic[i].I(2, 2) : Ic[i].m;
+    const int k = joints[i].axis();  // S^T Ic S = Ic(k, k) for S = e_k
+    const double about_axis = Ic[i].matrix()(k, k);
     if (!(about_axis > 1e-15)) {
       throw ModelError("joint '" + joint_name[i] +
                        "': its subtree has no mass or inertia about the joint axis");
@@ -103,36 +205,17 @@ Model make_chain(int n, bool floating, const std::vector<double>& masses, double
     return Inertia::from_com(mass, Vec3(0.5 * L, 0, 0), I);
   };
   auto mass_of = [&](int i) { return masses.empty() ? 1.0 : masses[i % masses.size()]; };
-  const double inf = std::numeric_limits<double>::infinity();
   m.start_with_base("base", box_inertia(mass_of(0), length));
   m.links.push_back({"base", 0, SE3()});
-  Geometry g;
-  g.type = GeometryType::Box;
-  g.size = Vec3(length, w, w);
-  g.origin = SE3(Mat3::Identity(), Vec3(0.5 * length, 0, 0));
-  m.visuals.push_back(g);
-  m.visual_body.push_back(0);
   // Successive joint axes cycle through the parent's z, y and x directions.
   const Mat3 turns[3] = {Mat3::Identity(),
                          Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitX()).toRotationMatrix(),
                          Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY()).toRotationMatrix()};
   for (int i = 1; i <= n; ++i) {
-    m.parent.push_back(i - 1);
-    m.X_tree.push_back(SE3(turns[i % 3], Vec3(length, 0, 0)));
-    m.joint_type.push_back(JointType::Revolute);
-    m.inertia.push_back(box_inertia(mass_of(i), length));
-    m.body_name.push_back("link" + std::to_string(i));
-    m.joint_name.push_back("j" + std::to_string(i));
-    m.lower.push_back(-inf);
-    m.upper.push_back(inf);
-    m.effort.push_back(inf);
-    m.velocity.push_back(inf);
-    m.damping.push_back(0);
-    m.friction.push_back(0);
+    m.add_body(i - 1, JointType::Revolute, SE3(turns[i % 3], Vec3(length, 0, 0)),
+               box_inertia(mass_of(i), length), "link" + std::to_string(i),
+               "j" + std::to_string(i));
     m.links.push_back({m.body_name.back(), i, SE3(), i - 1, m.joint_name.back(), false});
-    m.visuals.push_back(g);
-    m.visual_body.push_back(i);
-    m.n = i;
   }
   m.finalize();
   m.validate();

@@ -1,6 +1,5 @@
 // URDF -> Model: fixed joints merged into their parent body, moving joints turned so that
 // their axis is the body's z axis (the paper's eq. (26) S_j = e_z).
-#include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Cholesky>
@@ -9,26 +8,19 @@
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <mutex>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
+#include "se3_sim/limits.h"
 #include "se3_sim/model.h"
+#include "urdf_guard.h"
 #include "urdf_quirks.h"
 
 namespace se3 {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Collects urdfdom's console_bridge messages so a rejection becomes one clear line.
-class CaptureHandler : public console_bridge::OutputHandler {
- public:
-  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty())
-      first_error = text;
-  }
-  std::string first_error;
-};
 
 SE3 to_se3(const urdf::Pose& p) {
   double x, y, z, w;
@@ -42,38 +34,6 @@ Mat3 frame_with_z(const Vec3& a) {
   return Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), a).toRotationMatrix();
 }
 
-bool convert_geometry(const urdf::GeometrySharedPtr& g, Geometry& out) {
-  if (!g) return false;
-  switch (g->type) {
-    case urdf::Geometry::BOX: {
-      auto b = std::static_pointer_cast<urdf::Box>(g);
-      out.type = GeometryType::Box;
-      out.size = Vec3(b->dim.x, b->dim.y, b->dim.z);
-      return true;
-    }
-    case urdf::Geometry::CYLINDER: {
-      auto c = std::static_pointer_cast<urdf::Cylinder>(g);
-      out.type = GeometryType::Cylinder;
-      out.size = Vec3(c->radius, c->length, 0);
-      return true;
-    }
-    case urdf::Geometry::SPHERE: {
-      auto s = std::static_pointer_cast<urdf::Sphere>(g);
-      out.type = GeometryType::Sphere;
-      out.size = Vec3(s->radius, 0, 0);
-      return true;
-    }
-    case urdf::Geometry::MESH: {
-      auto m = std::static_pointer_cast<urdf::Mesh>(g);
-      out.type = GeometryType::Mesh;
-      out.mesh = m->filename;
-      out.mesh_scale = Vec3(m->scale.x, m->scale.y, m->scale.z);
-      return true;
-    }
-  }
-  return false;
-}
-
 struct Builder {
   const urdf::ModelInterface& urdf;
   const UrdfOptions& opt;
@@ -82,9 +42,9 @@ struct Builder {
   void add_body(int parent, const SE3& X_tree, JointType type, const urdf::Joint& j) {
     m.parent.push_back(parent);
     m.X_tree.push_back(X_tree);
-    m.joint_type.push_back(type);
+    m.joints.emplace_back(type);
     m.inertia.emplace_back();
-    m.body_name.push_back(j.child_link_name);
+    m.body_name.push_back(frame_name(j.child_link_name));
     m.joint_name.push_back(j.name);
     double lo = -kInf, hi = kInf, eff = kInf, vel = kInf;
     if (j.limits && j.type != urdf::Joint::CONTINUOUS) {
@@ -105,51 +65,25 @@ struct Builder {
     ++m.n;
   }
 
+  std::unordered_map<std::string, double> locked;  ///< opt.locked, looked up per joint
+
   double locked_position(const std::string& joint, bool& found) const {
-    for (const auto& kv : opt.locked) {
-      if (kv.first == joint) {
-        found = true;
-        return kv.second;
-      }
-    }
-    found = false;
-    return 0;
+    const auto it = locked.find(joint);
+    found = it != locked.end();
+    return found ? it->second : 0.0;
   }
 
   // parent: index in m.links of the URDF parent link (-1 for the root), j the joint from it.
   void add_link_data(const urdf::Link& link, int body, const SE3& O, int parent,
                      const urdf::Joint* j) {
-    m.links.push_back({link.name, body, O, parent, j ? j->name : std::string(),
+    const std::string name = frame_name(link.name);
+    if (m.link_index(name) >= 0) {
+      throw ModelError("link '" + link.name + "': its frame name '" + name +
+                       "' is another link's (a leading '/' is stripped, as tf2 does)");
+    }
+    m.links.push_back({name, body, O, parent, j ? j->name : std::string(),
                        j && j->type == urdf::Joint::FIXED});
     if (link.inertial) add_inertial(link, body, O);
-    auto add_geoms = [&](const auto& arr, const auto& single, std::vector<Geometry>& dst,
-                         std::vector<int>& dst_body, bool visual) {
-      auto add = [&](const auto& v) {
-        if (!v) return;
-        Geometry g;
-        if (!convert_geometry(v->geometry, g)) return;
-        g.origin = O * to_se3(v->origin);
-        g.link = link.name;
-        if constexpr (std::is_same_v<std::decay_t<decltype(*v)>, urdf::Visual>) {
-          urdf::MaterialSharedPtr mat = v->material;
-          if (!mat && !v->material_name.empty()) mat = urdf.getMaterial(v->material_name);
-          if (mat && (mat->color.r + mat->color.g + mat->color.b + mat->color.a) > 0) {
-            g.rgba = Eigen::Vector4d(mat->color.r, mat->color.g, mat->color.b, mat->color.a);
-            g.has_color = true;
-          }
-        }
-        (void)visual;
-        dst.push_back(g);
-        dst_body.push_back(body);
-      };
-      if (!arr.empty()) {
-        for (const auto& v : arr) add(v);
-      } else {
-        add(single);
-      }
-    };
-    add_geoms(link.visual_array, link.visual, m.visuals, m.visual_body, true);
-    add_geoms(link.collision_array, link.collision, m.collisions, m.collision_body, false);
   }
 
   void add_inertial(const urdf::Link& link, int body, const SE3& O) {
@@ -190,21 +124,47 @@ struct Builder {
     m.inertia[body] += Inertia::from_com(mass, Tc.p, I_body);
   }
 
-  // Depth-first: a body's subtree is contiguous, and parent[i] < i.
-  void visit(const urdf::Link& link, int body, const SE3& O, int parent_link = -1,
-             const urdf::Joint* from = nullptr) {
-    const int self = static_cast<int>(m.links.size());
-    add_link_data(link, body, O, parent_link, from);
-    for (const auto& j : link.child_joints) {
+  // Depth-first, children in URDF order: a body's subtree is contiguous, and parent[i] < i.
+  // An explicit stack instead of recursion: a chain of thousands of links overflowed the call
+  // stack. Each entry is a link being visited, its index in m.links and the next of its child
+  // joints to take.
+  struct Visit {
+    const urdf::Link* link;
+    int body;
+    SE3 O;
+    int self;
+    size_t next = 0;
+  };
+
+  void visit(const urdf::Link& root, int root_body, const SE3& root_O) {
+    std::vector<Visit> stack;
+    // parent: index in m.links of the URDF parent link (-1 for the root), from the joint to it.
+    auto enter = [&](const urdf::Link& link, int body, const SE3& O, int parent,
+                     const urdf::Joint* from) {
+      const int self = static_cast<int>(m.links.size());
+      add_link_data(link, body, O, parent, from);
+      stack.push_back({&link, body, O, self});
+    };
+    enter(root, root_body, root_O, -1, nullptr);
+    while (!stack.empty()) {
+      Visit& top = stack.back();
+      if (top.next == top.link->child_joints.size()) {
+        stack.pop_back();
+        continue;
+      }
+      const urdf::JointSharedPtr& jp = top.link->child_joints[top.next++];
+      const urdf::Joint* j = jp.get();
+      const int body = top.body, self = top.self;
+      const SE3 O = top.O;  // copies: enter() may move the stack
       const urdf::LinkConstSharedPtr child = urdf.getLink(j->child_link_name);
       if (!child) throw ModelError("joint '" + j->name + "': child link missing");
       const SE3 T = O * to_se3(j->parent_to_joint_origin_transform);
       Vec3 axis(j->axis.x, j->axis.y, j->axis.z);
-      bool locked = false;
-      const double ql = locked_position(j->name, locked);
+      bool is_locked = false;
+      const double ql = locked_position(j->name, is_locked);
       switch (j->type) {
         case urdf::Joint::FIXED:
-          visit(*child, body, T, self, j.get());
+          enter(*child, body, T, self, j);
           break;
         case urdf::Joint::REVOLUTE:
         case urdf::Joint::CONTINUOUS:
@@ -214,25 +174,28 @@ struct Builder {
           }
           axis.normalize();
           const bool prismatic = j->type == urdf::Joint::PRISMATIC;
-          if (locked) {
+          if (is_locked) {
             const SE3 motion = prismatic ? SE3(Mat3::Identity(), ql * axis)
                                          : SE3(exp_so3(ql * axis), Vec3::Zero());
-            visit(*child, body, T * motion, self, j.get());
+            enter(*child, body, T * motion, self, j);
             break;
           }
           const Mat3 Ra = frame_with_z(axis);
           const int i = m.n + 1;
           add_body(body, T * SE3(Ra, Vec3::Zero()),
                    prismatic ? JointType::Prismatic : JointType::Revolute, *j);
-          visit(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j.get());
+          enter(*child, i, SE3(Ra.transpose(), Vec3::Zero()), self, j);
           break;
         }
         case urdf::Joint::FLOATING:
           throw ModelError("joint '" + j->name +
-                           "': type floating is not supported inside the tree (a free base is "
-                           "chosen with --floating / base: free)");
+                           "': a floating joint is supported only from the "
+                           "URDF's root link (the world) to the robot's base; its parent is '" +
+                           j->parent_link_name + "'");
         case urdf::Joint::PLANAR:
-          throw ModelError("joint '" + j->name + "': type planar is not supported");
+          throw ModelError("joint '" + j->name +
+                           "': type planar is not supported (lock it, or model it as two "
+                           "prismatic joints and a revolute joint)");
         default:
           throw ModelError("joint '" + j->name + "': unknown joint type");
       }
@@ -240,44 +203,64 @@ struct Builder {
   }
 };
 
-std::mutex g_console_mutex;
+// The link the model's base starts from: the URDF's root, or, when the root holds only a
+// floating joint (the root is then the world, as in many URDFs), that joint's child, which
+// becomes the free base with the joint's origin as its rest pose.
+const urdf::Link& base_link(const urdf::ModelInterface& u, const urdf::Link& root, Model& m) {
+  const urdf::JointSharedPtr* fl = nullptr;
+  for (const auto& j : root.child_joints) {
+    if (j->type == urdf::Joint::FLOATING) fl = &j;
+  }
+  if (!fl) return root;
+  const urdf::Joint& j = **fl;
+  for (const auto& other : root.child_joints) {
+    if (other.get() != &j) {
+      throw ModelError("joint '" + j.name + "': the root link '" + root.name +
+                       "' before this floating joint is the world and may hold no other joint ('" +
+                       other->name + "')");
+    }
+  }
+  if (root.inertial || root.visual || root.collision || !root.visual_array.empty() ||
+      !root.collision_array.empty()) {
+    throw ModelError("joint '" + j.name + "': the root link '" + root.name +
+                     "' before this floating joint is the world and may have no inertial, "
+                     "visual or collision");
+  }
+  const urdf::LinkConstSharedPtr child = u.getLink(j.child_link_name);
+  if (!child) throw ModelError("joint '" + j.name + "': child link missing");
+  m.floating = true;
+  m.X_tree[0] = to_se3(j.parent_to_joint_origin_transform);
+  return *child;
+}
 
 }  // namespace
 
 Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options) {
+  check_urdf_text(xml);  // urdf_guard.h: size and nesting before tinyxml recurses
   std::vector<std::string> quirks;
   const std::string text = urdf_text_quirks(xml, quirks);  // urdf_quirks.h
-  urdf::ModelInterfaceSharedPtr u;
   std::string err;
-  {
-    std::lock_guard<std::mutex> lock(g_console_mutex);
-    CaptureHandler h;
-    console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
-    console_bridge::useOutputHandler(&h);
-    try {
-      u = urdf::parseURDF(text);
-    } catch (const std::exception& e) {
-      h.first_error = e.what();
-    }
-    console_bridge::useOutputHandler(previous);
-    err = h.first_error;
-  }
-  if (!u) {
-    throw ModelError("URDF rejected by urdfdom: " +
-                     (err.empty() ? std::string("parse error") : err));
-  }
+  std::vector<std::string> complaints;
+  urdf::ModelInterfaceSharedPtr u = parse_urdf(text, err, &complaints);
+  if (!u) throw ModelError("URDF rejected by urdfdom: " + err);
+  const UrdfRelease release(u);
+  check_urdf_joints(*u);
   const urdf::LinkConstSharedPtr root = u->getRoot();
   if (!root) throw ModelError("URDF has no root link");
 
   UrdfOptions opt = options;
   urdf_model_quirks(*u, opt.locked, quirks);  // joints that move only massless links: locked
-  Builder b{*u, opt, Model{}};
+  Builder b{*u, opt, Model{}, {}};
+  for (const auto& kv : opt.locked) b.locked.emplace(kv.first, kv.second);
   b.m.warnings = quirks;
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.start_with_base(root->name);
-  b.visit(*root, 0, SE3());
+  m.start_with_base(frame_name(root->name));
+  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
+  const urdf::Link& start = base_link(*u, *root, m);
+  m.root_link = m.body_name[0] = frame_name(start.name);
+  b.visit(start, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).
   for (int i = m.floating ? 0 : 1; i <= m.n; ++i) {
@@ -301,11 +284,21 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options)
 }
 
 Model model_from_urdf_file(const std::string& path, const UrdfOptions& opt) {
-  std::ifstream f(path);
+  std::ifstream f(path, std::ios::binary);
   if (!f) throw ModelError("cannot read URDF file '" + path + "'");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return model_from_urdf_string(ss.str(), opt);
+  // Read in pieces, so that a huge file or a device (/dev/zero) stops at the size limit.
+  std::string text;
+  char buf[1 << 16];
+  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+    text.append(buf, static_cast<size_t>(f.gcount()));
+    if (text.size() > limits::kMaxUrdfBytes) {
+      throw ModelError("URDF file '" + path + "': more than the " +
+                       std::to_string(limits::kMaxUrdfBytes) +
+                       " bytes a URDF may have; see the limits in docs/robustness.md");
+    }
+  }
+  if (f.bad()) throw ModelError("cannot read URDF file '" + path + "'");
+  return model_from_urdf_string(text, opt);
 }
 
 }  // namespace se3

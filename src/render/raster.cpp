@@ -1,4 +1,5 @@
-// The software rasterizer: scanline triangles with an inverse-depth buffer, anti-aliased lines.
+// The software rasterizer: buffers, anti-aliased lines and discs, the rgb8 copy (triangles:
+// triangle.cpp).
 #include "se3_sim/render/raster.h"
 
 #include <algorithm>
@@ -7,6 +8,8 @@
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
+#elif defined(__SSE2__)
+#include <emmintrin.h>
 #endif
 
 namespace se3 {
@@ -42,68 +45,31 @@ void Framebuffer::clear_depth() {
   std::memset(depth_.data(), 0, depth_.size() * sizeof(float));
 }
 
+void Framebuffer::clear_depth_rows(int y0, int y1) {
+  y0 = std::max(y0, 0);
+  y1 = std::min(y1, height_);
+  if (y1 > y0) {
+    std::memset(depth_.data() + std::size_t(y0) * width_, 0,
+                std::size_t(y1 - y0) * width_ * sizeof(float));
+  }
+}
+
+void Framebuffer::set_simd(bool on) {
+  simd_ = on && raster_has_simd();
+}
+
 void Framebuffer::fill_span(int y, int x0, int x1, uint32_t color) {
   if (y < 0 || y >= height_) return;
   x0 = std::max(x0, 0);
   x1 = std::min(x1, width_);
-  if (x1 > x0) std::fill_n(color_.data() + size_t(y) * width_ + x0, x1 - x0, color);
-}
-
-void Framebuffer::fill_triangle(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c,
-                                uint32_t color, bool write_depth) {
-  const ScreenVertex* v0 = &a;
-  const ScreenVertex* v1 = &b;
-  const ScreenVertex* v2 = &c;
-  if (v1->y < v0->y) std::swap(v0, v1);
-  if (v2->y < v1->y) std::swap(v1, v2);
-  if (v1->y < v0->y) std::swap(v0, v1);
-  const double e1x = v1->x - v0->x, e1y = v1->y - v0->y;
-  const double e2x = v2->x - v0->x, e2y = v2->y - v0->y;
-  const double area = e1x * e2y - e2x * e1y;
-  if (!(std::abs(area) > 1e-12)) return;
-  // Inverse depth is affine in screen space: iz = A x + B y + C.
-  const double d1 = v1->inv_depth - v0->inv_depth, d2 = v2->inv_depth - v0->inv_depth;
-  const double A = (d1 * e2y - d2 * e1y) / area;
-  const double B = (e1x * d2 - e2x * d1) / area;
-  const double C = v0->inv_depth - A * v0->x - B * v0->y;
-
-  // Rows whose centre y + 0.5 lies in [y0, y2).
-  const int ys = std::max(0, int(std::ceil(v0->y - 0.5)));
-  const int ye = std::min(height_, int(std::ceil(v2->y - 0.5)));
-  const double inv_long = 1.0 / (v2->y - v0->y);
-  const float fA = float(A);
-  for (int y = ys; y < ye; ++y) {
-    const double yc = y + 0.5;
-    const double xl0 = v0->x + (v2->x - v0->x) * (yc - v0->y) * inv_long;
-    double xs;
-    if (yc < v1->y) {
-      xs = v0->x + (v1->x - v0->x) * (yc - v0->y) / (v1->y - v0->y);
-    } else {
-      const double dy = v2->y - v1->y;
-      xs = dy > 0 ? v1->x + (v2->x - v1->x) * (yc - v1->y) / dy : v1->x;
-    }
-    double xl = xl0, xr = xs;
-    if (xl > xr) std::swap(xl, xr);
-    const int x0 = std::max(0, int(std::ceil(xl - 0.5)));
-    const int x1 = std::min(width_, int(std::ceil(xr - 0.5)));
-    if (x1 <= x0) continue;
-    const size_t row = size_t(y) * width_;
-    float iz = float(A * (x0 + 0.5) + B * yc + C);
-    uint32_t* col = color_.data() + row;
-    float* dep = depth_.data() + row;
-    if (write_depth) {
-      for (int x = x0; x < x1; ++x, iz += fA) {
-        if (iz > dep[x]) {
-          dep[x] = iz;
-          col[x] = color;
-        }
-      }
-    } else {
-      for (int x = x0; x < x1; ++x, iz += fA) {
-        if (iz > dep[x]) col[x] = color;
-      }
-    }
-  }
+  if (x1 <= x0) return;
+  uint32_t* p = color_.data() + size_t(y) * width_ + x0;
+  int n = x1 - x0;
+#if defined(__SSE2__)
+  const __m128i v = _mm_set1_epi32(int(color));
+  for (; n >= 4; n -= 4, p += 4) _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v);
+#endif
+  std::fill_n(p, n, color);
 }
 
 void Framebuffer::blend(int x, int y, Rgb c, float a) {
@@ -121,7 +87,7 @@ void Framebuffer::blend(int x, int y, Rgb c, float a) {
 }
 
 void Framebuffer::draw_line(const ScreenVertex& a, const ScreenVertex& b, Rgb color, float width,
-                            float opacity, bool depth_test, float fade) {
+                            float opacity, bool depth_test, float fade, const RowSet& rows) {
   const double dx = double(b.x) - a.x, dy = double(b.y) - a.y;
   const double len = std::sqrt(dx * dx + dy * dy);
   if (!(len > 1e-6) || !std::isfinite(len) || !(opacity > 0)) return;
@@ -155,6 +121,7 @@ void Framebuffer::draw_line(const ScreenVertex& a, const ScreenVertex& b, Rgb co
       const double cov = std::min(1.0, half + 0.5 - dist);
       if (cov <= 0) continue;
       const int x = steep ? n : m, y = steep ? m : n;
+      if (!rows.has(y)) continue;
       if (depth_test) {
         const float dz = depth_[size_t(y) * width_ + x];
         if (dz > iz * 1.002f + 1e-6f) continue;
@@ -202,8 +169,16 @@ __attribute__((target("ssse3"))) size_t copy_rgb8_ssse3(const uint32_t* src, siz
 #endif
 
 void Framebuffer::copy_rgb8(uint8_t* dst) const {
-  const size_t n = color_.size();
-  const uint32_t* src = color_.data();
+  copy_rgb8_rows(dst, 0, height_);
+}
+
+void Framebuffer::copy_rgb8_rows(uint8_t* dst, int y0, int y1) const {
+  y0 = std::max(y0, 0);
+  y1 = std::min(y1, height_);
+  if (y1 <= y0) return;
+  const size_t n = size_t(y1 - y0) * width_;
+  const uint32_t* src = color_.data() + size_t(y0) * width_;
+  dst += size_t(y0) * width_ * 3;
   size_t i = 0;
 #if defined(__x86_64__) && defined(__GNUC__)
   static const bool ssse3 = __builtin_cpu_supports("ssse3");

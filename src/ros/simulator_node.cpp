@@ -275,6 +275,7 @@ void SimulatorNodeImpl::configure() {
       joint_values(get_text(pnh_, "initial_positions").value_or(""), "~initial_positions");
   command_timeout_ = get_double(pnh_, "command_timeout").value_or(0.5);
   world_frame_ = get_text(pnh_, "world_frame").value_or("world");
+  world_frame_ = se3::frame_name(world_frame_);  // tf2 frame names have no leading '/'
   lockstep_ = get_bool(pnh_, "lockstep").value_or(false);
   max_wrench_ = get_double(pnh_, "max_wrench").value_or(1e4);
   max_effort_ = get_double(pnh_, "max_effort").value_or(1e4);
@@ -305,9 +306,10 @@ void SimulatorNodeImpl::configure() {
   rate_ = scene_.publish_rate;
   if (!had_description) {
     // Others (renderer, teleop, robot_state_publisher) read the robot from robot_description.
+    const se3::GeometryModel chain = se3::chain_geometry(m);  // chain:N has no file
     const std::string text = !urdf_xml.empty() ? urdf_xml
                              : scene_.robot_path.compare(0, 6, "chain:") == 0
-                                 ? se3::model_to_urdf(m)
+                                 ? se3::model_to_urdf(m, &chain)
                                  : read_file(scene_.robot_path);
     nh_.setParam("robot_description", text);
   }

@@ -14,47 +14,41 @@
 // directions name world axes (x, y, z) or give vectors [dx, dy, dz].
 #include "contact_scene.h"
 
+#include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
-#include "scene_reader.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
 namespace {
 
-using yaml_lite::Node;
+using Field = SceneReader::Field;
 
-using Rd = SceneReader;
-
-Vec3 direction(const Rd& r, const Node& n, const std::string& key) {
-  if (n.is_scalar()) {
-    if (n.value == "x") return Vec3::UnitX();
-    if (n.value == "y") return Vec3::UnitY();
-    if (n.value == "z") return Vec3::UnitZ();
-    r.fail(n, "'" + key + "' entries are x, y, z or [dx, dy, dz]");
+Vec3 direction(const SceneReader& r, const Field& f) {
+  if (f.node.IsScalar()) {
+    const std::string& v = f.node.Scalar();
+    if (v == "x") return Vec3::UnitX();
+    if (v == "y") return Vec3::UnitY();
+    if (v == "z") return Vec3::UnitZ();
+    r.fail(f, "'" + f.key + "' entries are x, y, z or [dx, dy, dz]");
   }
-  const Vec3 d = r.vec3(n, key);
-  if (!(d.norm() > 1e-12)) r.fail(n, "'" + key + "' has a zero vector");
+  const Vec3 d = r.vec3(f);
+  if (!(d.norm() > 1e-12)) r.fail(f, "'" + f.key + "' has a zero vector");
   return d;
 }
 
-void parse_bilateral(const Rd& r, const std::string& name, const Node& v, ConstraintSpec& spec) {
-  const std::string where = "constraints." + name;
-  r.map(v, where);
-  r.only_keys(
-      v, where,
-      {"type", "link_a", "point_a", "link_b", "point_b", "axis_a", "axis_world", "directions"});
+void parse_bilateral(const SceneReader& r, const Field& v, ConstraintSpec& spec) {
+  const std::string& where = v.key;
   BilateralConstraint c;
-  c.name = name;
+  c.name = v.name;
   bool has_type = false, has_a = false;
-  const Node* point_b = nullptr;
-  for (const auto& kv : v.map) {
-    const std::string& k = kv.first;
-    const Node& x = kv.second;
-    const std::string key = where + "." + k;
+  const Field* point_b = nullptr;
+  const std::vector<Field> fields = r.fields(
+      v, {"type", "link_a", "point_a", "link_b", "point_b", "axis_a", "axis_world", "directions"});
+  for (const Field& x : fields) {
+    const std::string& k = x.name;
     if (k == "type") {
-      const std::string t = r.text(x, key);
+      const std::string t = r.text(x);
       has_type = true;
       if (t == "point_world") {
         c.type = ConstraintType::PointWorld;
@@ -63,36 +57,36 @@ void parse_bilateral(const Rd& r, const std::string& name, const Node& v, Constr
       } else if (t == "axis_parallel") {
         c.type = ConstraintType::AxisParallel;
       } else {
-        r.fail(x, "'" + key + "' is point_world, point_point or axis_parallel, got '" + t + "'");
+        r.fail(x, "'" + x.key + "' is point_world, point_point or axis_parallel, got '" + t + "'");
       }
     } else if (k == "link_a") {
-      c.link_a = r.text(x, key);
+      c.link_a = r.text(x);
       has_a = true;
     } else if (k == "point_a") {
-      c.point_a = r.vec3(x, key);
+      c.point_a = r.vec3(x);
     } else if (k == "link_b") {
-      c.link_b = r.text(x, key);
+      c.link_b = r.text(x);
     } else if (k == "point_b") {
       point_b = &x;
     } else if (k == "axis_a") {
-      c.axis_a = direction(r, x, key);
+      c.axis_a = direction(r, x);
     } else if (k == "axis_world") {
-      c.axis_world = direction(r, x, key);
+      c.axis_world = direction(r, x);
     } else if (k == "directions") {
-      if (!x.is_list() || x.list.empty() || x.list.size() > 3) {
-        r.fail(x, "'" + key + "' needs a list of 1 to 3 directions");
+      if (!x.node.IsSequence() || x.node.size() == 0 || x.node.size() > 3) {
+        r.fail(x, "'" + x.key + "' needs a list of 1 to 3 directions");
       }
-      for (const Node& d : x.list) c.directions.push_back(direction(r, d, key));
+      for (const Field& d : r.items(x, 3)) c.directions.push_back(direction(r, d));
     }
   }
   if (!has_type) r.fail(v, "'" + where + "' needs a type");
   if (!has_a) r.fail(v, "'" + where + "' needs link_a");
   if (point_b) {
-    if (c.type == ConstraintType::PointWorld && point_b->is_scalar() &&
-        point_b->value == "initial") {
+    if (c.type == ConstraintType::PointWorld && point_b->node.IsScalar() &&
+        point_b->node.Scalar() == "initial") {
       c.world_point_from_initial = true;
     } else {
-      c.point_b = r.vec3(*point_b, where + ".point_b");
+      c.point_b = r.vec3(*point_b);
     }
   } else if (c.type == ConstraintType::PointWorld) {
     c.world_point_from_initial = true;
@@ -111,92 +105,72 @@ const std::vector<std::string>& constraint_scene_keys() {
   return keys;
 }
 
-void parse_constraint_key(const std::string& key, const Node& v, const std::string& file,
-                          ConstraintSpec& spec) {
-  const Rd r(file);
+void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& spec) {
+  const std::string& key = v.name;
   if (key == "constraints") {
-    if (v.is_scalar() && v.value.empty()) return;
-    r.map(v, key);
-    for (const auto& kv : v.map) parse_bilateral(r, kv.first, kv.second, spec);
+    for (const Field& c : r.fields(v, {}, true)) parse_bilateral(r, c, spec);
   } else if (key == "joint_limits") {
-    spec.joint_limits = r.boolean(v, key);
+    spec.joint_limits = r.boolean(v);
   } else if (key == "ground") {
-    if (v.is_scalar()) {
-      spec.ground = r.boolean(v, key);
+    if (v.node.IsScalar()) {
+      spec.ground = r.boolean(v);
       return;
     }
-    r.map(v, key);
-    r.only_keys(v, key, {"normal", "offset", "mu", "from_collisions"});
+    const std::vector<Field> fields = r.fields(v, {"normal", "offset", "mu", "from_collisions"});
     spec.ground = true;
-    for (const auto& kv : v.map) {
-      const std::string k = key + "." + kv.first;
-      if (kv.first == "normal") {
-        spec.ground_normal = direction(r, kv.second, k);
-      } else if (kv.first == "offset") {
-        spec.ground_offset = r.number(kv.second, k);
-      } else if (kv.first == "mu") {
-        spec.mu = r.number(kv.second, k);
-        if (spec.mu < 0) r.fail(kv.second, "'" + k + "' must be >= 0");
+    for (const Field& f : fields) {
+      if (f.name == "normal") {
+        spec.ground_normal = direction(r, f);
+      } else if (f.name == "offset") {
+        spec.ground_offset = r.number(f);
+      } else if (f.name == "mu") {
+        spec.mu = r.non_negative(f);
       } else {
-        spec.contacts_from_collisions = r.boolean(kv.second, k);
+        spec.contacts_from_collisions = r.boolean(f);
       }
     }
   } else if (key == "contacts") {
-    if (v.is_scalar() && v.value.empty()) return;
-    r.map(v, key);
-    for (const auto& kv : v.map) {
-      const std::string where = key + "." + kv.first;
-      r.map(kv.second, where);
-      r.only_keys(kv.second, where, {"link", "position", "radius"});
+    for (const Field& item : r.fields(v, {}, true)) {
       ContactPoint c;
-      c.name = kv.first;
-      for (const auto& p : kv.second.map) {
-        const std::string k = where + "." + p.first;
-        if (p.first == "link") {
-          c.link = r.text(p.second, k);
-        } else if (p.first == "position") {
-          c.position = r.vec3(p.second, k);
+      c.name = item.name;
+      for (const Field& p : r.fields(item, {"link", "position", "radius"})) {
+        if (p.name == "link") {
+          c.link = r.text(p);
+        } else if (p.name == "position") {
+          c.position = r.vec3(p);
         } else {
-          c.radius = r.number(p.second, k);
-          if (c.radius < 0) r.fail(p.second, "'" + k + "' must be >= 0");
+          c.radius = r.non_negative(p);
         }
       }
-      if (c.link.empty()) r.fail(kv.second, "'" + where + "' needs a link");
+      if (c.link.empty()) r.fail(item, "'" + item.key + "' needs a link");
       spec.contacts.push_back(c);
     }
   } else if (key == "constraint_options") {
-    r.map(v, key);
-    r.only_keys(
-        v, key,
-        {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol", "projection_iterations",
-         "singular_tol", "pgs_iterations", "pgs_tol", "erp", "slop", "margin", "bilateral_erp"});
     ConstraintOptions& o = spec.options;
-    for (const auto& kv : v.map) {
-      const std::string& k = kv.first;
-      const Node& x = kv.second;
-      const std::string kk = key + "." + k;
+    for (const Field& x :
+         r.fields(v, {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol",
+                      "projection_iterations", "singular_tol", "pgs_iterations", "pgs_tol", "erp",
+                      "slop", "margin", "bilateral_erp"})) {
+      const std::string& k = x.name;
       if (k == "project") {
-        o.project = r.boolean(x, kk);
-        continue;
-      }
-      const double val = r.number(x, kk);
-      if (val < 0) r.fail(x, "'" + kk + "' must be >= 0");
-      if (k == "baumgarte_omega") o.baumgarte_omega = val;
-      if (k == "baumgarte_zeta") o.baumgarte_zeta = val;
-      if (k == "projection_tol") o.projection_tol = val;
-      if (k == "projection_iterations") o.projection_iterations = static_cast<int>(val);
-      if (k == "singular_tol") o.singular_tol = val;
-      if (k == "pgs_iterations") o.pgs_iterations = std::max(1, static_cast<int>(val));
-      if (k == "pgs_tol") o.pgs_tol = val;
-      if (k == "erp") {
-        if (val > 1) r.fail(x, "'" + kk + "' must be in [0, 1]");
-        o.erp = val;
-      }
-      if (k == "slop") o.slop = val;
-      if (k == "margin") o.margin = val;
-      if (k == "bilateral_erp") {
-        if (val > 1) r.fail(x, "'" + kk + "' must be in [0, 1]");
-        o.bilateral_erp = val;
+        o.project = r.boolean(x);
+      } else if (k == "projection_iterations") {
+        o.projection_iterations = static_cast<int>(r.integer(x, 0, 1000000));
+      } else if (k == "pgs_iterations") {
+        o.pgs_iterations = std::max(1, static_cast<int>(r.integer(x, 0, 1000000)));
+      } else if (k == "erp") {
+        o.erp = r.in_range(x, 0, 1);
+      } else if (k == "bilateral_erp") {
+        o.bilateral_erp = r.in_range(x, 0, 1);
+      } else {
+        const double val = r.non_negative(x);
+        if (k == "baumgarte_omega") o.baumgarte_omega = val;
+        if (k == "baumgarte_zeta") o.baumgarte_zeta = val;
+        if (k == "projection_tol") o.projection_tol = val;
+        if (k == "singular_tol") o.singular_tol = val;
+        if (k == "pgs_tol") o.pgs_tol = val;
+        if (k == "slop") o.slop = val;
+        if (k == "margin") o.margin = val;
       }
     }
   }

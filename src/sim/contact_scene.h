@@ -5,16 +5,16 @@
 #include <string>
 #include <vector>
 
+#include "scene_reader.h"
 #include "se3_sim/constraints.h"
-#include "yaml_lite.h"
 
 namespace se3 {
 
 /// The top-level scene keys handled here.
 const std::vector<std::string>& constraint_scene_keys();
 
-/// Reads one of constraint_scene_keys() into spec. Throws SceneError naming file and line.
-void parse_constraint_key(const std::string& key, const yaml_lite::Node& value,
-                          const std::string& file, ConstraintSpec& spec);
+/// Reads the top-level field f (one of constraint_scene_keys()) into spec. Throws SceneError
+/// naming file and line.
+void parse_constraint_key(const SceneReader& r, const SceneReader::Field& f, ConstraintSpec& spec);
 
 }  // namespace se3

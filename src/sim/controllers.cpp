@@ -7,6 +7,8 @@
 #include <cmath>
 #include <set>
 
+#include "scene_reader.h"
+
 namespace se3 {
 
 // ------------------------------------------------------------------ Pid
@@ -267,7 +269,10 @@ std::vector<ControllerSpec> parse_controllers_text(const std::string& yaml_text,
                                                    const std::string& where) {
   YAML::Node root;
   try {
+    check_scene_text(yaml_text, where);  // size and nesting before yaml-cpp (scene_reader.h)
     root = YAML::Load(yaml_text);
+  } catch (const SceneError& e) {
+    throw ControllerError(e.what());
   } catch (const YAML::Exception& e) {
     throw ControllerError(where + ": " + e.what());
   }
@@ -335,7 +340,7 @@ double ControllerSet::position_error(int i, double target, double q) const {
   const double lo = model_.lower[i], hi = model_.upper[i];
   const bool limited = std::isfinite(lo) && std::isfinite(hi);
   if (limited) target = std::min(std::max(target, lo), hi);  // enforceJointLimits
-  if (model_.joint_type[i] == JointType::Revolute && !limited) {
+  if (model_.joints[i].angular() && !limited) {
     // Continuous: the shortest way round, in [-pi, pi].
     const double two_pi = 2 * M_PI;
     double e = std::fmod(target - q, two_pi);

@@ -1,4 +1,5 @@
 // simulate_headless (sim.h): the core of `se3_dyn simulate`.
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -6,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "se3_sim/limits.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -31,13 +33,32 @@ void write_row(std::ofstream& out, Simulator& sim) {
   for (int k = 0; k < 3; ++k) put(x.base.p[k]);
   const Eigen::Vector4d q = quaternion_from_rotation(x.base.R);
   for (int k = 0; k < 4; ++k) put(q[k]);
-  const int off = sim.model().floating ? 6 : 0;
+  const int off = sim.model().nv_base();
   for (int k = 0; k < off; ++k) put(x.v[k]);
   for (int k = 0; k < x.q.size(); ++k) put(x.q[k]);
   for (int k = 0; k < x.q.size(); ++k) put(x.v[off + k]);
   put(sim.kinetic_energy());
   put(sim.potential_energy());
   out << '\n';
+}
+
+// n as "1.5e+298" (std::to_string prints every digit).
+std::string figure(double n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", n);
+  return buf;
+}
+
+// "chain:N" checked (1 <= N <= limits::kMaxBodies); a path is left to the URDF loader.
+void check_chain(const std::string& model) {
+  if (model.compare(0, 6, "chain:") != 0) return;
+  char* end = nullptr;
+  errno = 0;
+  const long n = std::strtol(model.c_str() + 6, &end, 10);
+  if (model.size() == 6 || *end != '\0' || errno != 0 || n < 1 || n > limits::kMaxBodies) {
+    throw std::invalid_argument("chain:N needs 1 <= N <= " + std::to_string(limits::kMaxBodies) +
+                                ", got '" + model + "'");
+  }
 }
 
 }  // namespace
@@ -47,32 +68,47 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     throw std::invalid_argument("duration must be a finite number >= 0");
   }
   if (o.dt < 0 || !std::isfinite(o.dt)) throw std::invalid_argument("dt must be positive");
+  if (o.dt > 0 && o.dt < limits::kMinDt) {
+    throw std::invalid_argument("dt " + figure(o.dt) +
+                                " s is below the smallest step, 1e-9 s (docs/robustness.md)");
+  }
   if (o.tol < 0 || !std::isfinite(o.tol)) throw std::invalid_argument("tol must be positive");
   Scene scene;
   bool use_scene_state = false;
   if (!o.scene.empty()) {
     scene = load_scene(o.scene);
     use_scene_state = !o.random_initial;
+    if (!scene.base_given) scene.floating = o.floating;
+    if (o.floating) scene.floating = true;
   } else {
     if (o.model.empty()) throw std::invalid_argument("simulate needs a model or a scene");
-    scene.robot = o.model;
     scene.floating = o.floating;
-    if (o.model.compare(0, 6, "chain:") == 0) {
-      char* end = nullptr;
-      const long n = std::strtol(o.model.c_str() + 6, &end, 10);
-      if (*end != '\0' || n < 1 || n > 100000) {
-        throw std::invalid_argument("chain:N needs 1 <= N <= 100000, got '" + o.model + "'");
-      }
-    }
-    scene.robot_path = o.model;
     scene.file = o.model;
+  }
+  if (!o.model.empty()) {  // a robot from outside replaces the scene's
+    check_chain(o.model);
+    scene.robot = o.model;
+    scene.robot_path = o.model;
   }
   if (o.has_gravity) scene.gravity = o.gravity;
   if (!o.integrator.empty()) scene.integrator = o.integrator;
   if (o.dt > 0) scene.dt = o.dt;
   if (o.tol > 0) scene.tol = o.tol;
+  // The work asked for, before anything is built: steps, then steps x bodies.
+  const double steps_asked = o.duration / scene.dt;
+  if (!(steps_asked <= static_cast<double>(limits::kMaxSteps))) {
+    throw std::invalid_argument("duration / dt asks for " + figure(steps_asked) +
+                                " steps, more than the " + figure(limits::kMaxSteps) +
+                                " one run may take (docs/robustness.md)");
+  }
 
   Model model = scene_model(scene);
+  const double bodies = model.n + 1;
+  if (steps_asked * bodies > o.max_body_steps) {
+    throw std::invalid_argument(figure(steps_asked) + " steps of " + std::to_string(model.n + 1) +
+                                " bodies are more than the " + figure(o.max_body_steps) +
+                                " body-steps one run may take (docs/robustness.md)");
+  }
   const State x0 = use_scene_state ? scene_state(scene, model) : random_state(model, o.seed);
   SimConfig cfg;
   cfg.integrator = scene.integrator;
@@ -80,7 +116,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   Simulator sim(std::move(model), x0, cfg);
-  if (!scene.constraints.empty()) sim.set_constraints(scene.constraints);
+  if (!scene.constraints.empty()) sim.set_constraints(scene_constraints(scene, sim.model()));
   if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;
@@ -110,6 +146,15 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     if (!ok) {
       r.diverged = true;
       r.status = sim.failure();
+      break;
+    }
+    // An adaptive stepper may take many internal steps per step: they count as work too.
+    if (static_cast<double>(sim.substeps() + sim.rejected()) * bodies > o.max_body_steps) {
+      r.stopped = true;
+      r.status = "stopped at t = " + figure(sim.time()) + " s: the adaptive stepper's " +
+                 std::to_string(sim.substeps() + sim.rejected()) + " internal steps of " +
+                 std::to_string(static_cast<long long>(bodies)) + " bodies passed the " +
+                 figure(o.max_body_steps) + " body-steps one run may take (docs/robustness.md)";
       break;
     }
     // Diagnostics every step, outside the timed part.
@@ -150,18 +195,32 @@ std::string simulate_result_json(const SimulateResult& r) {
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
   };
-  std::string name;
-  for (char c : r.integrator) {
-    if (c == '"' || c == '\\') name += '\\';
-    name += c;
-  }
+  auto text = [](const std::string& t) {
+    std::string out = "\"";
+    for (const char ch : t) {
+      const auto c = static_cast<unsigned char>(ch);
+      if (c == '"' || c == '\\') {
+        out += '\\';
+        out += ch;
+      } else if (c < 0x20) {
+        char buf[8];
+        std::snprintf(buf, sizeof buf, "\\u%04x", c);
+        out += buf;
+      } else {
+        out += ch;
+      }
+    }
+    return out + "\"";
+  };
   std::ostringstream o;
-  o << "{\"integrator\": \"" << name << "\", \"dt\": " << num(r.dt)
+  o << "{\"integrator\": " << text(r.integrator) << ", \"dt\": " << num(r.dt)
     << ", \"sim_s\": " << num(r.sim_s) << ", \"wall_s\": " << num(r.wall_s)
     << ", \"steps\": " << r.steps << ", \"energy_drift_rel\": " << num(r.energy_drift_rel)
     << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
-    << ", \"constraint_error_max\": " << num(r.constraint_error_max) << "}";
+    << ", \"constraint_error_max\": " << num(r.constraint_error_max)
+    << ", \"diverged\": " << (r.diverged ? "true" : "false")
+    << ", \"status\": " << (r.status.empty() ? std::string("null") : text(r.status)) << "}";
   return o.str();
 }
 

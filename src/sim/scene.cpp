@@ -1,24 +1,24 @@
 // Scenes (sim.h): YAML text -> Scene -> Model and initial State.
 #include <sys/stat.h>
-#include <yaml-cpp/yaml.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <unordered_map>
 
 #include "contact_scene.h"
 #include "scene_reader.h"
+#include "se3_sim/limits.h"
 #include "se3_sim/sim.h"
-#include "yaml_lite.h"
 
 namespace se3 {
 namespace {
-
-using yaml_lite::Node;
 
 bool file_exists(const std::string& p) {
   struct stat st;
@@ -44,225 +44,230 @@ std::string package_root(std::string dir) {
   return "";
 }
 
-using Reader = SceneReader;
+using Field = SceneReader::Field;
+
+void read_base_pose(const SceneReader& r, const Field& v, Scene& s) {
+  for (const Field& p : r.fields(v, {"position", "orientation"})) {
+    if (p.name == "position") {
+      s.base_pose.p = r.vec3(p);
+    } else {
+      const auto qv = r.numbers(p, 4, 4);
+      const double norm = std::sqrt(qv[0] * qv[0] + qv[1] * qv[1] + qv[2] * qv[2] + qv[3] * qv[3]);
+      if (std::abs(norm - 1) > 1e-3) {
+        r.fail(p, "base_pose.orientation (x, y, z, w) is not a unit quaternion");
+      }
+      s.base_pose.R = rotation_from_quaternion(qv[0], qv[1], qv[2], qv[3]);
+    }
+  }
+}
+
+void read_base_visual(const SceneReader& r, const Field& v, Scene& s) {
+  s.has_base_visual = true;
+  bool has_box = false;
+  for (const Field& p : r.fields(v, {"box", "origin", "color"})) {
+    if (p.name == "box") {
+      s.base_visual_box = r.vec3(p);
+      if (!(s.base_visual_box.minCoeff() > 0)) {
+        r.fail(p, "base_visual.box needs three positive extents");
+      }
+      has_box = true;
+    } else if (p.name == "origin") {
+      s.base_visual_origin = r.vec3(p);
+    } else {
+      s.base_visual_color = r.vec3(p);
+      if (!(s.base_visual_color.minCoeff() >= 0 && s.base_visual_color.maxCoeff() <= 1)) {
+        r.fail(p, "base_visual.color needs three values in [0, 1]");
+      }
+    }
+  }
+  if (!has_box) r.fail(v, "'base_visual' needs box: [x, y, z]");
+}
+
+void read_base_inertia(const SceneReader& r, const Field& v, Scene& s) {
+  s.has_base_inertia = true;
+  for (const Field& p : r.fields(v, {"mass", "com", "inertia"})) {
+    if (p.name == "mass") {
+      s.base_mass = r.positive(p);
+    } else if (p.name == "com") {
+      s.base_com = r.vec3(p);
+    } else {
+      const auto I = r.numbers(p, 3, 6);
+      if (I.size() != 3 && I.size() != 6) {
+        r.fail(p, "base_inertia.inertia needs [ixx, iyy, izz] or six values");
+      }
+      Mat3 M = Mat3::Zero();
+      M(0, 0) = I[0];
+      M(1, 1) = I[1];
+      M(2, 2) = I[2];
+      if (I.size() == 6) {
+        M(0, 1) = M(1, 0) = I[3];
+        M(0, 2) = M(2, 0) = I[4];
+        M(1, 2) = M(2, 1) = I[5];
+      }
+      const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
+      const Vec3 ev = es.eigenvalues();
+      if (!(ev.minCoeff() > 0) || ev[0] + ev[1] < ev[2] * (1 - 1e-9)) {
+        r.fail(p, "base_inertia.inertia is not a physical inertia");
+      }
+      s.base_inertia = M;
+    }
+  }
+  if (!(s.base_mass > 0)) r.fail(v, "base_inertia needs a mass");
+}
+
+void read_chain(const SceneReader& r, const Field& v, Scene& s) {
+  for (const Field& p : r.fields(v, {"length", "masses"})) {
+    if (p.name == "length") {
+      s.chain_length = r.positive(p);
+    } else {
+      s.chain_masses = r.numbers(p, 1, 1000);
+      for (double m : s.chain_masses) {
+        if (!(m > 0)) r.fail(p, "chain.masses must be positive");
+      }
+    }
+  }
+}
+
+void read_integrator(const SceneReader& r, const Field& v, Scene& s) {
+  s.integrator = r.text(v);
+  const auto names = stepper_names();
+  if (std::find(names.begin(), names.end(), s.integrator) == names.end()) {
+    std::string list;
+    for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+    r.fail(v, "unknown integrator '" + s.integrator + "' (known: " + list + ")");
+  }
+}
+
+// ros_control's YAML shape (controllers.h): parse_controllers names the file, line, controller
+// and key itself.
+void read_controllers(const SceneReader& r, const Field& v, Scene& s) {
+  try {
+    s.controllers = parse_controllers(v.node, {}, r.file());
+  } catch (const ControllerError& e) {
+    throw SceneError(e.what());
+  }
+}
+
+// The top-level keys and what reads each. A later key (objects, ...) is one more row.
+using KeyReader = void (*)(const SceneReader&, const Field&, Scene&);
+const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
+  static const std::vector<std::pair<const char*, KeyReader>> keys = {
+      {"name", [](const SceneReader& r, const Field& v, Scene& s) { s.name = r.text(v); }},
+      {"robot", [](const SceneReader& r, const Field& v, Scene& s) { s.robot = r.text(v); }},
+      {"base",
+       [](const SceneReader& r, const Field& v, Scene& s) {
+         const std::string b = r.text(v);
+         if (b != "free" && b != "fixed") r.fail(v, "'base' is free or fixed, got '" + b + "'");
+         s.floating = b == "free";
+         s.base_given = true;
+       }},
+      {"base_pose", read_base_pose},
+      {"base_twist",
+       [](const SceneReader& r, const Field& v, Scene& s) {
+         const auto t = r.numbers(v, 6, 6);
+         for (int i = 0; i < 6; ++i) s.base_twist[i] = t[i];
+       }},
+      {"base_inertia", read_base_inertia},
+      {"base_visual", read_base_visual},
+      {"initial_positions", [](const SceneReader& r, const Field& v,
+                               Scene& s) { s.initial_positions = r.joint_map(v); }},
+      {"initial_velocities", [](const SceneReader& r, const Field& v,
+                                Scene& s) { s.initial_velocities = r.joint_map(v); }},
+      {"locked_joints",
+       [](const SceneReader& r, const Field& v, Scene& s) { s.locked_joints = r.joint_map(v); }},
+      {"gravity", [](const SceneReader& r, const Field& v, Scene& s) { s.gravity = r.vec3(v); }},
+      {"integrator", read_integrator},
+      {"dt",
+       [](const SceneReader& r, const Field& v, Scene& s) {
+         s.dt = r.positive(v);
+         if (s.dt < limits::kMinDt) {
+           r.fail(v, "'dt' is below the smallest step, 1e-9 s (docs/robustness.md)");
+         }
+       }},
+      {"tol", [](const SceneReader& r, const Field& v, Scene& s) { s.tol = r.positive(v); }},
+      {"real_time_factor",
+       [](const SceneReader& r, const Field& v, Scene& s) {
+         s.real_time_factor = r.number(v);
+         if (s.real_time_factor < 0) {
+           r.fail(v, "'real_time_factor' must be >= 0 (0: as fast as possible)");
+         }
+       }},
+      {"publish_rate",
+       [](const SceneReader& r, const Field& v, Scene& s) { s.publish_rate = r.positive(v); }},
+      {"friction_eps",
+       [](const SceneReader& r, const Field& v, Scene& s) { s.friction_eps = r.positive(v); }},
+      {"chain", read_chain},
+      {"controllers", read_controllers},
+  };
+  return keys;
+}
+
+std::string resolve_robot(const Scene& s, const std::string& base_dir) {
+  if (s.robot.compare(0, 6, "chain:") == 0) {
+    char* end = nullptr;
+    errno = 0;
+    const long n = std::strtol(s.robot.c_str() + 6, &end, 10);
+    if (s.robot.size() == 6 || *end != '\0' || errno != 0 || n < 1 || n > limits::kMaxBodies) {
+      throw SceneError(s.file +
+                       ": robot chain:N needs 1 <= N <= " + std::to_string(limits::kMaxBodies));
+    }
+    return s.robot;
+  }
+  if (s.robot[0] == '/') {
+    if (!file_exists(s.robot)) {
+      throw SceneError(s.file + ": robot file '" + s.robot + "' not found");
+    }
+    return s.robot;
+  }
+  std::vector<std::string> tried = {base_dir + "/" + s.robot};
+  const std::string root_dir = package_root(base_dir);
+  if (!root_dir.empty()) tried.push_back(root_dir + "/" + s.robot);
+  for (const auto& t : tried) {
+    if (file_exists(t)) return t;
+  }
+  std::string list;
+  for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t;
+  throw SceneError(s.file + ": robot '" + s.robot + "' not found (tried " + list + ")");
+}
 
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& base_dir,
                   const std::string& file_for_messages) {
-  Node root;
-  try {
-    root = yaml_lite::parse(text);
-  } catch (const yaml_lite::Error& e) {
-    throw SceneError(file_for_messages + ": " + e.what());
-  }
-  const Reader r(file_for_messages);
-  std::vector<std::string> keys = {"name",
-                                   "robot",
-                                   "base",
-                                   "base_pose",
-                                   "base_twist",
-                                   "base_inertia",
-                                   "base_visual",
-                                   "initial_positions",
-                                   "initial_velocities",
-                                   "locked_joints",
-                                   "gravity",
-                                   "integrator",
-                                   "dt",
-                                   "tol",
-                                   "real_time_factor",
-                                   "publish_rate",
-                                   "friction_eps",
-                                   "chain",
-                                   "controllers"};
-  for (const auto& k : constraint_scene_keys()) keys.push_back(k);  // constraints.h
-  r.only_keys(root, "the scene", keys);
+  const SceneReader r(file_for_messages);
+  const Field root = r.document(text);
+  std::vector<std::string> known;
+  for (const auto& k : scene_keys()) known.push_back(k.first);
+  for (const auto& k : constraint_scene_keys()) known.push_back(k);  // constraints.h
   Scene s;
   s.file = file_for_messages;
-  bool has_robot = false;
-  for (const auto& kv : root.map) {
-    const std::string& k = kv.first;
-    const Node& v = kv.second;
-    if (k == "name") {
-      s.name = r.text(v, k);
-    } else if (k == "robot") {
-      s.robot = r.text(v, k);
-      has_robot = true;
-    } else if (k == "base") {
-      const std::string b = r.text(v, k);
-      if (b != "free" && b != "fixed") r.fail(v, "'base' is free or fixed, got '" + b + "'");
-      s.floating = b == "free";
-      s.base_given = true;
-    } else if (k == "base_pose") {
-      if (!v.is_map()) r.fail(v, "'base_pose' needs {position: [..], orientation: [..]}");
-      r.only_keys(v, "base_pose", {"position", "orientation"});
-      for (const auto& p : v.map) {
-        if (p.first == "position") {
-          s.base_pose.p = r.vec3(p.second, "base_pose.position");
-        } else {
-          const auto qv = r.numbers(p.second, "base_pose.orientation", 4, 4);
-          const double norm =
-              std::sqrt(qv[0] * qv[0] + qv[1] * qv[1] + qv[2] * qv[2] + qv[3] * qv[3]);
-          if (std::abs(norm - 1) > 1e-3) {
-            r.fail(p.second, "base_pose.orientation (x, y, z, w) is not a unit quaternion");
-          }
-          s.base_pose.R = rotation_from_quaternion(qv[0], qv[1], qv[2], qv[3]);
-        }
-      }
-    } else if (k == "base_twist") {
-      const auto t = r.numbers(v, k, 6, 6);
-      for (int i = 0; i < 6; ++i) s.base_twist[i] = t[i];
-    } else if (k == "base_visual") {
-      if (!v.is_map()) r.fail(v, "'base_visual' needs {box: [x,y,z], origin: [..], color: [..]}");
-      r.only_keys(v, "base_visual", {"box", "origin", "color"});
-      s.has_base_visual = true;
-      bool has_box = false;
-      for (const auto& p : v.map) {
-        if (p.first == "box") {
-          s.base_visual_box = r.vec3(p.second, "base_visual.box");
-          if (!(s.base_visual_box.minCoeff() > 0)) {
-            r.fail(p.second, "base_visual.box needs three positive extents");
-          }
-          has_box = true;
-        } else if (p.first == "origin") {
-          s.base_visual_origin = r.vec3(p.second, "base_visual.origin");
-        } else {
-          s.base_visual_color = r.vec3(p.second, "base_visual.color");
-          if (!(s.base_visual_color.minCoeff() >= 0 && s.base_visual_color.maxCoeff() <= 1)) {
-            r.fail(p.second, "base_visual.color needs three values in [0, 1]");
-          }
-        }
-      }
-      if (!has_box) r.fail(v, "'base_visual' needs box: [x, y, z]");
-    } else if (k == "base_inertia") {
-      if (!v.is_map()) r.fail(v, "'base_inertia' needs {mass: m, com: [..], inertia: [..]}");
-      r.only_keys(v, "base_inertia", {"mass", "com", "inertia"});
-      s.has_base_inertia = true;
-      for (const auto& p : v.map) {
-        if (p.first == "mass") {
-          s.base_mass = r.number(p.second, "base_inertia.mass");
-          if (!(s.base_mass > 0)) r.fail(p.second, "base_inertia.mass must be positive");
-        } else if (p.first == "com") {
-          s.base_com = r.vec3(p.second, "base_inertia.com");
-        } else {
-          const auto I = r.numbers(p.second, "base_inertia.inertia", 3, 6);
-          if (I.size() != 3 && I.size() != 6) {
-            r.fail(p.second, "base_inertia.inertia needs [ixx, iyy, izz] or six values");
-          }
-          Mat3 M = Mat3::Zero();
-          M(0, 0) = I[0];
-          M(1, 1) = I[1];
-          M(2, 2) = I[2];
-          if (I.size() == 6) {
-            M(0, 1) = M(1, 0) = I[3];
-            M(0, 2) = M(2, 0) = I[4];
-            M(1, 2) = M(2, 1) = I[5];
-          }
-          const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
-          const Vec3 ev = es.eigenvalues();
-          if (!(ev.minCoeff() > 0) || ev[0] + ev[1] < ev[2] * (1 - 1e-9)) {
-            r.fail(p.second, "base_inertia.inertia is not a physical inertia");
-          }
-          s.base_inertia = M;
-        }
-      }
-      if (!(s.base_mass > 0)) r.fail(v, "base_inertia needs a mass");
-    } else if (k == "initial_positions") {
-      s.initial_positions = r.joint_map(v, k);
-    } else if (k == "initial_velocities") {
-      s.initial_velocities = r.joint_map(v, k);
-    } else if (k == "locked_joints") {
-      s.locked_joints = r.joint_map(v, k);
-    } else if (k == "gravity") {
-      s.gravity = r.vec3(v, k);
-    } else if (k == "integrator") {
-      s.integrator = r.text(v, k);
-      const auto names = stepper_names();
-      bool known = false;
-      for (const auto& n : names) known = known || n == s.integrator;
-      if (!known) r.fail(v, "unknown integrator '" + s.integrator + "'");
-    } else if (k == "dt") {
-      s.dt = r.number(v, k);
-      if (!(s.dt > 0)) r.fail(v, "'dt' must be positive");
-    } else if (k == "tol") {
-      s.tol = r.number(v, k);
-      if (!(s.tol > 0)) r.fail(v, "'tol' must be positive");
-    } else if (k == "real_time_factor") {
-      s.real_time_factor = r.number(v, k);
-      if (s.real_time_factor < 0)
-        r.fail(v, "'real_time_factor' must be >= 0 (0: as fast as possible)");
-    } else if (k == "publish_rate") {
-      s.publish_rate = r.number(v, k);
-      if (!(s.publish_rate > 0)) r.fail(v, "'publish_rate' must be positive");
-    } else if (k == "friction_eps") {
-      s.friction_eps = r.number(v, k);
-      if (!(s.friction_eps > 0)) r.fail(v, "'friction_eps' must be positive");
-    } else if (k == "controllers") {
-      // ros_control's YAML shape (controllers.h), read with yaml-cpp from the same text.
-      try {
-        s.controllers = parse_controllers(YAML::Load(text)["controllers"], {}, file_for_messages);
-      } catch (const YAML::Exception& e) {
-        throw SceneError(file_for_messages + ": controllers: " + e.what());
-      } catch (const ControllerError& e) {
-        throw SceneError(e.what());
-      }
-    } else if (std::find(constraint_scene_keys().begin(), constraint_scene_keys().end(), k) !=
-               constraint_scene_keys().end()) {
-      parse_constraint_key(k, v, file_for_messages, s.constraints);
-    } else if (k == "chain") {
-      if (!v.is_map()) r.fail(v, "'chain' needs {length: L, masses: [..]}");
-      r.only_keys(v, "chain", {"length", "masses"});
-      for (const auto& p : v.map) {
-        if (p.first == "length") {
-          s.chain_length = r.number(p.second, "chain.length");
-          if (!(s.chain_length > 0)) r.fail(p.second, "chain.length must be positive");
-        } else {
-          s.chain_masses = r.numbers(p.second, "chain.masses", 1, 1000);
-          for (double m : s.chain_masses) {
-            if (!(m > 0)) r.fail(p.second, "chain.masses must be positive");
-          }
-        }
-      }
-    }
-  }
-  if (s.name.empty()) s.name = s.robot;
-  if (!has_robot) {
-    // No robot: it comes from outside (scene_model's urdf_xml, e.g. robot_description).
-  } else if (s.robot.compare(0, 6, "chain:") == 0) {
-    char* end = nullptr;
-    const long n = std::strtol(s.robot.c_str() + 6, &end, 10);
-    if (*end != '\0' || n < 1 || n > 100000) {
-      throw SceneError(file_for_messages + ": robot chain:N needs 1 <= N <= 100000");
-    }
-    s.robot_path = s.robot;
-  } else if (!s.robot.empty() && s.robot[0] == '/') {
-    s.robot_path = s.robot;
-  } else {
-    std::vector<std::string> tried = {base_dir + "/" + s.robot};
-    const std::string root_dir = package_root(base_dir);
-    if (!root_dir.empty()) tried.push_back(root_dir + "/" + s.robot);
-    for (const auto& t : tried) {
-      if (file_exists(t)) {
-        s.robot_path = t;
+  for (const Field& f : r.fields(root, known)) {
+    bool done = false;
+    for (const auto& k : scene_keys()) {
+      if (f.name == k.first) {
+        k.second(r, f, s);
+        done = true;
         break;
       }
     }
-    if (s.robot_path.empty()) {
-      std::string list;
-      for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t;
-      throw SceneError(file_for_messages + ": robot '" + s.robot + "' not found (tried " + list +
-                       ")");
-    }
+    if (!done) parse_constraint_key(r, f, s.constraints);
   }
-  if (!s.robot_path.empty() && s.robot_path[0] == '/' && !file_exists(s.robot_path)) {
-    throw SceneError(file_for_messages + ": robot file '" + s.robot_path + "' not found");
-  }
+  if (!s.robot.empty()) s.robot_path = resolve_robot(s, base_dir);
+  if (s.name.empty()) s.name = s.robot;
   return s;
 }
 
 Scene load_scene(const std::string& path) {
-  std::ifstream in(path);
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+    throw SceneError("cannot read scene file '" + path + "'");
+  }
+  if (static_cast<std::uint64_t>(st.st_size) > limits::kMaxSceneBytes) {
+    throw SceneError(path + ": " + std::to_string(st.st_size) + " bytes, more than the " +
+                     std::to_string(limits::kMaxSceneBytes) +
+                     " a scene may have (docs/robustness.md)");
+  }
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError("cannot read scene file '" + path + "'");
   std::stringstream ss;
   ss << in.rdbuf();
@@ -271,6 +276,11 @@ Scene load_scene(const std::string& path) {
 
 Model scene_model(const Scene& scene, const std::string& urdf_xml) {
   Model m;
+  if (urdf_xml.empty() && scene.robot_path.empty()) {
+    throw SceneError((scene.file.empty() ? std::string("the scene") : scene.file) +
+                     ": no robot: the scene has no 'robot:' and none was given (a URDF, e.g. "
+                     "robot_description)");
+  }
   if (urdf_xml.empty() && scene.robot_path.compare(0, 6, "chain:") == 0) {
     if (!scene.locked_joints.empty()) {
       throw SceneError(scene.file + ": locked_joints are not supported for chain:N robots");
@@ -284,8 +294,17 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
     UrdfOptions opt;
     opt.floating = scene.floating;
     opt.locked = scene.locked_joints;
-    m = urdf_xml.empty() ? model_from_urdf_file(scene.robot_path, opt)
-                         : model_from_urdf_string(urdf_xml, opt);
+    try {
+      m = urdf_xml.empty() ? model_from_urdf_file(scene.robot_path, opt)
+                           : model_from_urdf_string(urdf_xml, opt);
+    } catch (const ModelError& e) {
+      // A locked joint the robot lacks is the scene's error: name the scene.
+      const std::string what = e.what();
+      if (!scene.file.empty() && what.compare(0, 13, "locked joint ") == 0) {
+        throw SceneError(scene.file + ": locked_joints names joint " + what.substr(13));
+      }
+      throw;
+    }
   }
   if (scene.has_base_inertia) {
     m.inertia[0] += Inertia::from_com(scene.base_mass, scene.base_com, scene.base_inertia);
@@ -298,20 +317,21 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
 State scene_state(const Scene& scene, const Model& model) {
   State x(model);
   x.base = scene.base_pose;
-  const int off = model.floating ? 6 : 0;
+  std::unordered_map<std::string, int> joints;
+  for (int i = 1; i <= model.n; ++i) joints.emplace(model.joint_name[i], i);
   auto index = [&](const std::string& joint, const char* key) {
-    const int i = model.joint_index(joint);
-    if (i < 1) {
+    const auto it = joints.find(joint);
+    if (it == joints.end()) {
       throw SceneError(scene.file + ": " + key + " names joint '" + joint +
-                       "', which the model does not move");
+                       "', which the robot does not move");
     }
-    return i;
+    return it->second;
   };
   for (const auto& kv : scene.initial_positions) {
-    x.q[index(kv.first, "initial_positions") - 1] = kv.second;
+    x.q[model.idx_q(index(kv.first, "initial_positions"))] = kv.second;
   }
   for (const auto& kv : scene.initial_velocities) {
-    x.v[off + index(kv.first, "initial_velocities") - 1] = kv.second;
+    x.v[model.idx_v(index(kv.first, "initial_velocities"))] = kv.second;
   }
   if (model.floating) {
     x.v.head<6>() = scene.base_twist;
@@ -337,7 +357,7 @@ State random_state(const Model& model, unsigned seed) {
   return x;
 }
 
-std::string model_to_urdf(const Model& model) {
+std::string model_to_urdf(const Model& model, const GeometryModel* geometry) {
   std::ostringstream o;
   o.precision(17);
   auto origin = [&](const SE3& f) {
@@ -359,25 +379,26 @@ std::string model_to_urdf(const Model& model) {
         << "\" ixz=\"" << Ic(0, 2) << "\" iyy=\"" << Ic(1, 1) << "\" iyz=\"" << Ic(1, 2)
         << "\" izz=\"" << Ic(2, 2) << "\"/></inertial>\n";
     }
-    for (size_t g = 0; g < model.visuals.size(); ++g) {
-      if (model.visual_body[g] != i) continue;
-      const Geometry& geo = model.visuals[g];
+    for (const GeometryObject& geo : geometry ? geometry->visuals : std::vector<GeometryObject>()) {
+      if (geo.body != i || geo.stand_in) continue;
+      const Shape& sh = geo.shape;
       o << "    <visual>";
-      origin(geo.origin);
+      origin(geo.placement);
       o << "<geometry>";
-      switch (geo.type) {
-        case GeometryType::Box:
-          o << "<box size=\"" << geo.size.x() << ' ' << geo.size.y() << ' ' << geo.size.z()
-            << "\"/>";
+      switch (sh.type) {
+        case ShapeType::Box:
+          o << "<box size=\"" << sh.box.x() << ' ' << sh.box.y() << ' ' << sh.box.z() << "\"/>";
           break;
-        case GeometryType::Cylinder:
-          o << "<cylinder radius=\"" << geo.size.x() << "\" length=\"" << geo.size.y() << "\"/>";
+        case ShapeType::Cylinder:
+        case ShapeType::Capsule:  // URDF has no capsule
+          o << "<cylinder radius=\"" << sh.radius << "\" length=\"" << sh.length << "\"/>";
           break;
-        case GeometryType::Sphere:
-          o << "<sphere radius=\"" << geo.size.x() << "\"/>";
+        case ShapeType::Sphere:
+          o << "<sphere radius=\"" << sh.radius << "\"/>";
           break;
-        case GeometryType::Mesh:
-          o << "<mesh filename=\"" << geo.mesh << "\"/>";
+        case ShapeType::Mesh:
+          o << "<mesh filename=\"" << sh.resource << "\" scale=\"" << sh.scale.x() << ' '
+            << sh.scale.y() << ' ' << sh.scale.z() << "\"/>";
           break;
       }
       o << "</geometry></visual>\n";
@@ -385,15 +406,14 @@ std::string model_to_urdf(const Model& model) {
     o << "  </link>\n";
   }
   for (int i = 1; i <= model.n; ++i) {
-    const bool rev = model.joint_type[i] == JointType::Revolute;
     const bool limited = std::isfinite(model.lower[i]) && std::isfinite(model.upper[i]);
-    const char* type = !rev ? "prismatic" : (limited ? "revolute" : "continuous");
+    const std::string type = model.joints[i].urdf_type(limited);
     o << "  <joint name=\"" << model.joint_name[i] << "\" type=\"" << type << "\">";
     o << "<parent link=\"" << model.body_name[model.parent[i]] << "\"/><child link=\""
       << model.body_name[i] << "\"/>";
     origin(model.X_tree[i]);
-    o << "<axis xyz=\"0 0 1\"/>";
-    if (limited || !rev) {
+    o << "<axis xyz=\"0 0 1\"/>";  // every joint's axis is its body's z (model.h)
+    if (type != "continuous") {    // URDF requires <limit> on the other moving joints
       const double e = std::isfinite(model.effort[i]) ? model.effort[i] : 1e9;
       const double vl = std::isfinite(model.velocity[i]) ? model.velocity[i] : 1e9;
       o << "<limit lower=\"" << (limited ? model.lower[i] : -1e9) << "\" upper=\""

@@ -1,91 +1,98 @@
-// Reads typed values from the scene YAML (yaml_lite) with errors that name the file and line;
-// shared by the scene keys (scene.cpp) and the constraint keys (contact_scene.cpp).
+// Typed reading of scene YAML (yaml-cpp) with errors that name the file and the line: the
+// scene keys (scene.cpp), the constraint keys (contact_scene.cpp) and every later key
+// (objects, controllers) read their values through one SceneReader.
+//
+//   const SceneReader r(file);
+//   const SceneReader::Field root = r.document(text);        // limits, then yaml-cpp
+//   for (const SceneReader::Field& f : r.fields(root, {"dt", "base_pose"})) {
+//     if (f.name == "dt") dt = r.positive(f);
+//     if (f.name == "base_pose")
+//       for (const auto& p : r.fields(f, {"position", "orientation"})) ...
+//   }
+//
+// A Field is one value with its dotted key ("base_pose.position", "objects[2].mass") and its
+// line, so that a message reads "scene.yaml:12: 'base_pose.position' needs 3 numbers".
 #pragma once
 
-#include <cmath>
-#include <cstdlib>
+#include <yaml-cpp/yaml.h>
+
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "se3_sim/sim.h"
-#include "yaml_lite.h"
 
 namespace se3 {
 
+/// Checks scene text against limits::kMaxSceneBytes, kMaxYamlDepth and kMaxYamlItems and
+/// refuses control characters, before yaml-cpp (which recurses once per nesting level) sees it.
+/// The depth and item counts are upper bounds found in one pass without recursion. Throws
+/// SceneError("file:line: ...").
+void check_scene_text(const std::string& text, const std::string& file);
+
+/// The bounds check_scene_text compares with the limits: nesting depth (counted as there) and
+/// items, whatever their size (for tests and the fuzz target, which check them against what
+/// yaml-cpp builds).
+struct SceneTextShape {
+  int depth = 0;
+  std::size_t items = 0;
+};
+SceneTextShape scene_text_shape(const std::string& text);
+
+/// The text with YAML's line ends (LF, CRLF, CR alone) as LF: what yaml-cpp is given (it reads a
+/// CR alone as text).
+std::string with_lf_line_ends(const std::string& text);
+
 class SceneReader {
  public:
-  explicit SceneReader(const std::string& file) : file_(file) {}
+  /// One value of the scene: its key path for messages, the YAML node and its line.
+  struct Field {
+    std::string name;  ///< the last key ("position"), or "[i]" for a list item
+    std::string key;   ///< the whole path ("base_pose.position", "objects[2]"); "" for the root
+    YAML::Node node;
+    int line = 0;  ///< 1-based; for an empty value, the line of its key
+  };
 
-  [[noreturn]] void fail(const yaml_lite::Node& n, const std::string& what) const {
-    throw SceneError(file_ + ":" + std::to_string(n.line) + ": " + what);
-  }
+  explicit SceneReader(std::string file) : file_(std::move(file)) {}
+  const std::string& file() const { return file_; }
 
-  double number(const yaml_lite::Node& n, const std::string& key) const {
-    if (!n.is_scalar() || n.value.empty()) fail(n, "'" + key + "' needs a number");
-    char* end = nullptr;
-    const double x = std::strtod(n.value.c_str(), &end);
-    if (*end != '\0' || !std::isfinite(x)) {
-      fail(n, "'" + key + "' needs a finite number, got '" + n.value + "'");
-    }
-    return x;
-  }
+  /// The scene text as one YAML document whose top level is a map (an empty text is an empty
+  /// map). check_scene_text first; YAML errors carry their line. Throws SceneError.
+  Field document(const std::string& text) const;
 
-  std::string text(const yaml_lite::Node& n, const std::string& key) const {
-    if (!n.is_scalar() || n.value.empty()) fail(n, "'" + key + "' needs a value");
-    return n.value;
-  }
+  [[noreturn]] void fail(const Field& f, const std::string& what) const;
+  [[noreturn]] void fail(int line, const std::string& what) const;
 
-  std::vector<double> numbers(const yaml_lite::Node& n, const std::string& key, size_t min_size,
-                              size_t max_size) const {
-    if (!n.is_list()) fail(n, "'" + key + "' needs a list [a, b, ...]");
-    if (n.list.size() < min_size || n.list.size() > max_size) {
-      fail(n, "'" + key + "' needs " + std::to_string(min_size) +
-                  (min_size == max_size ? "" : " to " + std::to_string(max_size)) + " numbers");
-    }
-    std::vector<double> v;
-    for (const auto& x : n.list) v.push_back(number(x, key));
-    return v;
-  }
+  // ---- structure
+  /// `key:` with nothing after it, `~` or `null`.
+  static bool is_null(const Field& f) { return !f.node || f.node.IsNull(); }
+  /// The entries of a map in file order. Keys must be scalars and unique; with `known` not
+  /// empty, each must be one of them (the message lists them). An empty value is an empty map
+  /// when allow_null.
+  std::vector<Field> fields(const Field& map, const std::vector<std::string>& known = {},
+                            bool allow_null = false) const;
+  /// The items of a list ("key[0]", "key[1]", ...); at most max_items of them.
+  std::vector<Field> items(const Field& list, std::size_t max_items = 100000,
+                           bool allow_null = false) const;
 
-  Vec3 vec3(const yaml_lite::Node& n, const std::string& key) const {
-    const auto v = numbers(n, key, 3, 3);
-    return Vec3(v[0], v[1], v[2]);
-  }
-
-  std::vector<std::pair<std::string, double>> joint_map(const yaml_lite::Node& n,
-                                                        const std::string& key) const {
-    std::vector<std::pair<std::string, double>> out;
-    if (n.is_scalar() && n.value.empty()) return out;
-    if (!n.is_map()) fail(n, "'" + key + "' needs a map {joint: value, ...}");
-    for (const auto& kv : n.map) out.emplace_back(kv.first, number(kv.second, key));
-    return out;
-  }
-
-  bool boolean(const yaml_lite::Node& n, const std::string& key) const {
-    const std::string v = text(n, key);
-    if (v == "true" || v == "True" || v == "yes" || v == "on") return true;
-    if (v == "false" || v == "False" || v == "no" || v == "off") return false;
-    fail(n, "'" + key + "' needs true or false, got '" + v + "'");
-  }
-
-  const yaml_lite::Node& map(const yaml_lite::Node& n, const std::string& key) const {
-    if (!n.is_map()) fail(n, "'" + key + "' needs a map {key: value, ...}");
-    return n;
-  }
-
-  void only_keys(const yaml_lite::Node& n, const std::string& where,
-                 const std::vector<std::string>& keys) const {
-    for (const auto& kv : n.map) {
-      bool known = false;
-      for (const auto& k : keys) known = known || k == kv.first;
-      if (!known) {
-        std::string list;
-        for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
-        fail(kv.second, "unknown key '" + kv.first + "' in " + where + " (known: " + list + ")");
-      }
-    }
-  }
+  // ---- values
+  /// A finite number (YAML int or float; quoted numbers are accepted as well).
+  double number(const Field& f) const;
+  double positive(const Field& f) const;      ///< > 0
+  double non_negative(const Field& f) const;  ///< >= 0
+  /// A number in [lo, hi].
+  double in_range(const Field& f, double lo, double hi) const;
+  /// A whole number in [lo, hi].
+  long integer(const Field& f, long lo, long hi) const;
+  /// A non-empty scalar.
+  std::string text(const Field& f) const;
+  /// true/false (also True/TRUE, yes/no, on/off).
+  bool boolean(const Field& f) const;
+  /// A list of min_size..max_size numbers.
+  std::vector<double> numbers(const Field& f, std::size_t min_size, std::size_t max_size) const;
+  Vec3 vec3(const Field& f) const;
+  /// {joint: value, ...} in file order (an empty value is an empty map).
+  std::vector<std::pair<std::string, double>> joint_map(const Field& f) const;
 
  private:
   std::string file_;

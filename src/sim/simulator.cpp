@@ -24,7 +24,10 @@ KineticEnergyBound::KineticEnergyBound(const Model& model)
     if (i == 0) continue;
     b.parent = model.parent[i];
     b.iv = model.idx_v(i);
-    b.prismatic = model.joint_type[i] == JointType::Prismatic;
+    b.iq = model.idx_q(i);
+    const Vec6 S = model.joints[i].motion_subspace().col(0);  // a one-dof joint
+    b.turn = S.head<3>().norm();
+    b.slide = S.tail<3>().norm();
     b.offset = model.X_tree[i].p.norm();
   }
 }
@@ -43,17 +46,10 @@ double KineticEnergyBound::operator()(const VecX& q, const VecX& v) {
     const Path& up = path_[b.parent];
     Path& p = path_[i];
     const double qd = std::abs(v[b.iv]);
-    if (b.prismatic) {
-      p.L = up.L + b.offset + std::abs(q[i - 1]);
-      p.W = up.W;
-      p.P = up.P;
-      p.S = up.S + qd;
-    } else {
-      p.L = up.L + b.offset;
-      p.W = up.W + qd;
-      p.P = up.P + qd * p.L;
-      p.S = up.S;
-    }
+    p.L = up.L + b.offset + b.slide * std::abs(q[b.iq]);
+    p.W = up.W + b.turn * qd;
+    p.P = up.P + b.turn * qd * p.L;
+    p.S = up.S + b.slide * qd;
     const double r = p.L + b.com;  // base origin to the centre of mass, at most
     // sum_j |qdot_j| (r - L_j) over the revolute joints j on the path: r W - P.
     const double vc = v0 + w0 * r + (r * p.W - p.P) + p.S;
@@ -239,10 +235,12 @@ void add_link_wrench_force(const Model& model, const Data& data, int link, const
   const Vec3 p = (data.oMb[L.body] * L.offset).act(point);
   const Vec3 N = wrench.head<3>(), F = wrench.tail<3>();
   for (int i = L.body; i > 0; i = model.parent[i]) {
+    // S^T of the wrench about the body origin, S = [s_w; s_v] the joint's motion subspace in
+    // the body frame turned into the world.
     const SE3& X = data.oMb[i];
-    const Vec3 a = X.R.col(2);  // the joint axis is the body's z axis (model.h)
-    tau[model.idx_v(i)] +=
-        model.joint_type[i] == JointType::Prismatic ? a.dot(F) : a.dot(N + (p - X.p).cross(F));
+    const Vec6 S = Vec6::Unit(model.joints[i].axis());  // a one-dof joint
+    const Vec3 w = X.R * S.head<3>(), u = X.R * S.tail<3>();
+    tau[model.idx_v(i)] += w.dot(N + (p - X.p).cross(F)) + u.dot(F);
   }
   if (model.floating) {
     const SE3& B = data.oMb[0];
@@ -307,18 +305,14 @@ void Simulator::clear_command() {
 }
 
 void Simulator::applied_joint_efforts(VecX& out) {
-  const int off = model_->floating ? 6 : 0;
   out.resize(model_->n);
-  // The command as it stands; a controlled joint's effort as its controller set it last step.
-  for (int i = 0; i < model_->n; ++i) {
-    const int k = off + i;
-    out[i] = controllers_ && controllers_->controls(i + 1) ? actuation_[k] : command_[k];
-  }
-  const StepperOptions& o = stepper_->options();
-  if (!o.passive_forces) return;
+  const PassiveForces& passive = stepper_->passive();
+  // The command as it stands (a controlled joint's effort as its controller set it last step),
+  // plus the passive forces.
   for (int i = 1; i <= model_->n; ++i) {
-    const double qd = state_.v[off + i - 1];
-    out[i - 1] -= model_->damping[i] * qd + model_->friction[i] * std::tanh(qd / o.friction_eps);
+    const int k = model_->idx_v(i);
+    const double cmd = controllers_ && controllers_->controls(i) ? actuation_[k] : command_[k];
+    out[i - 1] = passive.at(k, cmd, state_.v[k]);
   }
 }
 
@@ -495,7 +489,9 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
-  if (!scene.constraints.empty()) sim->set_constraints(scene.constraints);
+  if (!scene.constraints.empty()) {
+    sim->set_constraints(scene_constraints(scene, sim->model(), urdf_xml));
+  }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }

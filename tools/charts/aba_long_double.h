@@ -50,7 +50,7 @@ inline Vec6L crossf(const Vec6L& V, const Vec6L& F) {
 /// ddq (nv) for tau (nv; the first six entries a wrench on a free base).
 inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::VectorXd& q,
                              const Eigen::VectorXd& v, const Eigen::VectorXd& tau) {
-  const int n = m.n, off = m.floating ? 6 : 0;
+  const int n = m.n;
   std::vector<Mat6L> Xi(n + 1), IA(n + 1);
   std::vector<Vec6L> V(n + 1), c(n + 1), pA(n + 1), U(n + 1), A(n + 1);
   std::vector<L> D(n + 1), u(n + 1);
@@ -76,7 +76,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
     const L qi = q[i - 1];
     Mat3L R = Rt;
     Vec3L p = pt;
-    ax[i] = m.joint_type[i] == JointType::Revolute ? 2 : 5;
+    ax[i] = m.joints[i].axis();
     if (ax[i] == 2) {
       Mat3L Rz = Mat3L::Identity();
       Rz(0, 0) = std::cos(qi);
@@ -88,7 +88,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
       p = pt + qi * Rt.col(2);
     }
     Xi[i] = motion_inv(R, p);
-    const L qd = v[off + i - 1];
+    const L qd = v[m.idx_v(i)];
     V[i] = Xi[i] * V[m.parent[i]];
     V[i][ax[i]] += qd;
     Vec6L Sq = Vec6L::Zero();
@@ -100,7 +100,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
   for (int i = n; i >= 1; --i) {
     U[i] = IA[i].col(ax[i]);
     D[i] = U[i][ax[i]];
-    u[i] = static_cast<L>(tau[off + i - 1]) - pA[i][ax[i]];
+    u[i] = static_cast<L>(tau[m.idx_v(i)]) - pA[i][ax[i]];
     const Mat6L Ia = IA[i] - U[i] * U[i].transpose() / D[i];
     const Vec6L pa = pA[i] + Ia * c[i] + U[i] * (u[i] / D[i]);
     const int p = m.parent[i];
@@ -119,7 +119,7 @@ inline VecXL aba_long_double(const Model& m, const SE3& base, const Eigen::Vecto
     A[i] = Xi[i] * A[m.parent[i]] + c[i];
     const L qdd = (u[i] - U[i].dot(A[i])) / D[i];
     A[i][ax[i]] += qdd;
-    out[off + i - 1] = qdd;
+    out[m.idx_v(i)] = qdd;
   }
   return out;
 }

@@ -34,10 +34,6 @@
 #include "se3_sim/integrate.h"
 #include "se3_sim/sim.h"
 
-namespace se3 {
-void register_extra_steppers();
-}
-
 using namespace se3;
 using se3::reference::aba_long_double;
 using se3::reference::VecXL;
@@ -57,13 +53,7 @@ Model free_body(const Vec3& principal, double mass) {
   Model m;
   m.name = "free_body";
   m.floating = true;
-  m.parent = {-1};
-  m.X_tree = {SE3()};
-  m.joint_type = {JointType::Revolute};
-  m.inertia = {Inertia::from_com(mass, Vec3::Zero(), principal.asDiagonal())};
-  m.body_name = {"body"};
-  m.joint_name = {""};
-  m.lower = m.upper = m.effort = m.velocity = m.damping = m.friction = {0.0};
+  m.start_with_base("body", Inertia::from_com(mass, Vec3::Zero(), principal.asDiagonal()));
   m.links.push_back({"body", 0, SE3()});
   m.gravity.setZero();
   m.finalize();
@@ -447,7 +437,6 @@ void dynamics_charts(const std::string& outdir, bool quick) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  register_extra_steppers();
   if (argc < 2) {
     std::cerr << "usage: charts_data OUTDIR [--root PACKAGE_DIR] [--only "
                  "work|energy|dynamics|study|stability] [--quick]\n";

@@ -155,7 +155,7 @@ MujocoRobot::MujocoRobot(const Model& ours, const std::string& urdf_text, const 
   // Joints by name.
   for (int i = 1; i <= ours.n; ++i) {
     const int j = mj_name2id(m_, mjOBJ_JOINT, ours.joint_name[i].c_str());
-    const int want = ours.joint_type[i] == JointType::Revolute ? mjJNT_HINGE : mjJNT_SLIDE;
+    const int want = ours.joints[i].type == JointType::Revolute ? mjJNT_HINGE : mjJNT_SLIDE;
     if (j < 0 || m_->jnt_type[j] != want) {
       mj_deleteModel(m_);
       throw std::runtime_error("MuJoCo peer: joint '" + ours.joint_name[i] + "' missing or of " +

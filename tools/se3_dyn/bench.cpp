@@ -7,6 +7,7 @@
 
 #include "cli.h"
 #include "se3_sim/dynamics.h"
+#include "se3_sim/limits.h"
 
 namespace se3_dyn {
 namespace {
@@ -45,6 +46,11 @@ int cmd_bench(int argc, char** argv) {
   const Args args(argc, argv, 2, {"floating", "json"}, {"algo", "gravity", "seconds"});
   const se3::Model m = load_model(args);
   std::vector<std::string> algos = {"fk", "rnea", "aba", "crba", "minv"};
+  if (!args.has("algo") && m.nv > se3::limits::kMaxDenseNv) {
+    algos = {"fk", "rnea", "aba"};
+    std::fprintf(stderr, "se3_dyn bench: crba and minv left out: nv = %d is more than %d\n", m.nv,
+                 se3::limits::kMaxDenseNv);
+  }
   if (args.has("algo")) {
     algos.clear();
     std::stringstream ss(args.get("algo"));
@@ -56,7 +62,15 @@ int cmd_bench(int argc, char** argv) {
       algos.push_back(a);
     }
   }
+  for (const auto& a : algos) {
+    if ((a == "crba" || a == "minv") && m.nv > se3::limits::kMaxDenseNv) {
+      throw InputError(a + " makes an nv x nv matrix: nv = " + std::to_string(m.nv) +
+                       " is more than the " + std::to_string(se3::limits::kMaxDenseNv) +
+                       " it allows (docs/robustness.md); choose --algo fk,rnea,aba");
+    }
+  }
   const double seconds = args.get_double("seconds", 1.0);  // per algorithm
+  if (!(seconds > 0 && seconds <= 3600)) throw UsageError("--seconds needs 0 < s <= 3600");
   se3::Data d(m);
   constexpr int kStates = 32;
   const RandomStates s = make_states(m, kStates, 1);

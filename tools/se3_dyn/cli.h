@@ -1,6 +1,7 @@
-// Shared pieces of the se3_dyn command-line tool (DESIGN.md, "se3_dyn").
+// Shared pieces of the se3_dyn command-line tool (docs/design.md, "se3_dyn").
 #pragma once
 
+#include <iosfwd>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,7 +35,15 @@ struct Args {
 /// Loads a model for se3_dyn: URDF file (or chain:N), free base on request, --gravity, and the
 /// column-name rules (no ':' or ',' in joint names, none starting with "base_").
 se3::Model load_model(const Args& args);
+/// N of "chain:N" (1 <= N <= limits::kMaxBodies), else InputError.
+int chain_length(const std::string& spec);
 se3::Vec3 parse_vec3(const std::string& s, const std::string& what);
+
+/// `eval`'s work on a stream: CSV with a header row in, CSV out (written only when every row
+/// was good). algo is rnea, aba, crba or minv. Throws InputError naming the line and column for
+/// bad input, input beyond limits::kMaxCsvBytes, or a result that is not finite (inputs so
+/// large that the dynamics overflow).
+void eval_csv(const se3::Model& m, const std::string& algo, std::istream& in, std::ostream& out);
 
 int cmd_info(int argc, char** argv);
 int cmd_eval(int argc, char** argv);

@@ -1,12 +1,14 @@
-// se3_dyn info and eval: the model summary and CSV in, CSV out (DESIGN.md).
+// se3_dyn info and eval: the model summary and CSV in, CSV out (docs/design.md).
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <sstream>
 
 #include "cli.h"
 #include "se3_sim/dynamics.h"
+#include "se3_sim/limits.h"
 
 namespace se3_dyn {
 namespace {
@@ -34,6 +36,36 @@ std::vector<std::string> split_csv(const std::string& line) {
   return out;
 }
 
+// A field quoted in a message: printable, at most 60 characters.
+std::string shown(const std::string& s) {
+  std::string out;
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    out += (c < 0x20 || c == 0x7f) ? '?' : ch;
+    if (out.size() >= 60) return out + "...";
+  }
+  return out;
+}
+
+// One line of input without its '\n' (false at the end); counts the bytes against budget so
+// that no input, however long its lines, makes eval read past limits::kMaxCsvBytes.
+bool read_line(std::istream& in, std::string& line, std::size_t& budget) {
+  line.clear();
+  std::streambuf* sb = in.rdbuf();
+  bool any = false;
+  for (int c = sb->sbumpc(); c != std::char_traits<char>::eof(); c = sb->sbumpc()) {
+    any = true;
+    if (budget == 0) {
+      throw InputError("more than " + std::to_string(se3::limits::kMaxCsvBytes) +
+                       " bytes of input (docs/robustness.md)");
+    }
+    --budget;
+    if (c == '\n') return true;
+    line += static_cast<char>(c);
+  }
+  return any;
+}
+
 // Coordinate names: base_wx ... base_vz for a free base, then joint names.
 std::vector<std::string> coordinate_names(const se3::Model& m) {
   std::vector<std::string> names;
@@ -57,10 +89,8 @@ int cmd_info(int argc, char** argv) {
   std::printf("total mass: %.6g kg\n", m.total_mass());
   for (int i = 1; i <= m.n; ++i) {
     std::printf("  %3d %-28s %-9s parent %-24s limits [%g, %g] effort %g damping %g friction %g\n",
-                i, m.joint_name[i].c_str(),
-                m.joint_type[i] == se3::JointType::Revolute ? "revolute" : "prismatic",
-                m.body_name[m.parent[i]].c_str(), m.lower[i], m.upper[i], m.effort[i], m.damping[i],
-                m.friction[i]);
+                i, m.joint_name[i].c_str(), m.joints[i].name(), m.body_name[m.parent[i]].c_str(),
+                m.lower[i], m.upper[i], m.effort[i], m.damping[i], m.friction[i]);
   }
   for (const auto& w : m.warnings) std::printf("warning: %s\n", w.c_str());
   return 0;
@@ -73,12 +103,28 @@ int cmd_eval(int argc, char** argv) {
     throw UsageError("--algo must be rnea, aba, crba or minv");
   }
   const se3::Model m = load_model(args);
+  std::ostringstream out;
+  eval_csv(m, algo, std::cin, out);
+  std::cout << out.str();
+  return 0;
+}
+
+void eval_csv(const se3::Model& m, const std::string& algo, std::istream& input,
+              std::ostream& output) {
+  if ((algo == "crba" || algo == "minv") && m.nv > se3::limits::kMaxDenseNv) {
+    throw InputError("--algo " + algo + " prints nv x nv numbers per row: nv = " +
+                     std::to_string(m.nv) + " is more than the " +
+                     std::to_string(se3::limits::kMaxDenseNv) + " it allows (docs/robustness.md)");
+  }
   se3::Data d(m);
-  const int n = m.n, off = m.floating ? 6 : 0;
+  const int n = m.n, off = m.nv_base();
   const bool needs_v = algo == "rnea" || algo == "aba";
 
   std::string line;
-  if (!std::getline(std::cin, line)) throw InputError("empty input: a CSV header row is needed");
+  std::size_t budget = se3::limits::kMaxCsvBytes;
+  if (!read_line(input, line, budget)) {
+    throw InputError("empty input: a CSV header row is needed");
+  }
   const std::vector<std::string> header = split_csv(line);
   std::map<std::string, int> col;
   for (size_t k = 0; k < header.size(); ++k) {
@@ -88,10 +134,10 @@ int cmd_eval(int argc, char** argv) {
       const std::string kind = h.substr(0, colon), joint = h.substr(colon + 1);
       if ((kind == "q" || kind == "v" || kind == "a" || kind == "tau") &&
           m.joint_index(joint) < 0) {
-        throw InputError("column '" + h + "' names an unknown joint '" + joint + "'");
+        throw InputError("column '" + shown(h) + "' names an unknown joint '" + shown(joint) + "'");
       }
     }
-    if (col.count(h)) throw InputError("column '" + h + "' appears twice");
+    if (col.count(h)) throw InputError("column '" + shown(h) + "' appears twice");
     col[h] = static_cast<int>(k);
   }
   auto need = [&](const std::string& name) {
@@ -151,7 +197,7 @@ int cmd_eval(int argc, char** argv) {
   se3::VecX q(n), v = se3::VecX::Zero(m.nv), in = se3::VecX::Zero(m.nv);
   char buf[40];
   int lineno = 1;
-  while (std::getline(std::cin, line)) {
+  while (read_line(input, line, budget)) {
     ++lineno;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const std::vector<std::string> f = split_csv(line);
@@ -164,8 +210,8 @@ int cmd_eval(int argc, char** argv) {
       char* end = nullptr;
       const double x = std::strtod(s.c_str(), &end);
       if (s.empty() || *end != '\0' || !std::isfinite(x)) {
-        throw InputError("line " + std::to_string(lineno) + ", column '" + header[k] +
-                         "': not a finite number: '" + s + "'");
+        throw InputError("line " + std::to_string(lineno) + ", column '" + shown(header[k]) +
+                         "': not a finite number: '" + shown(s) + "'");
       }
       return x;
     };
@@ -201,13 +247,21 @@ int cmd_eval(int argc, char** argv) {
       res = se3::minv(m, d, base, q).data();
     }
     for (size_t k = 0; k < out_cols.size(); ++k) {
+      if (!std::isfinite(res[k])) {
+        throw InputError("line " + std::to_string(lineno) + ": " + out_cols[k] +
+                         " is not finite: the inputs are too large for double precision");
+      }
       std::snprintf(buf, sizeof buf, "%.17g", res[k]);
       out << (k ? "," : "") << buf;
     }
     out << "\n";
+    if (static_cast<std::size_t>(out.tellp()) > se3::limits::kMaxCsvBytes) {
+      throw InputError("line " + std::to_string(lineno) + ": the output passes " +
+                       std::to_string(se3::limits::kMaxCsvBytes) +
+                       " bytes (docs/robustness.md); split the input");
+    }
   }
-  std::cout << out.str();
-  return 0;
+  output << out.str();
 }
 
 }  // namespace se3_dyn

@@ -1,114 +1,12 @@
-// se3_dyn: the library on the command line, no ROS master needed (DESIGN.md).
+// se3_dyn: the library on the command line, no ROS master needed (docs/design.md).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <new>
 
 #include "cli.h"
-
-namespace se3_dyn {
-
-Args::Args(int argc, char** argv, int first, const std::vector<std::string>& flags,
-           const std::vector<std::string>& valued) {
-  auto in = [](const std::vector<std::string>& v, const std::string& s) {
-    for (const auto& x : v) {
-      if (x == s) return true;
-    }
-    return false;
-  };
-  for (int i = first; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a.size() > 2 && a.compare(0, 2, "--") == 0) {
-      std::string name = a.substr(2), value;
-      const auto eq = name.find('=');
-      if (eq != std::string::npos) {
-        value = name.substr(eq + 1);
-        name = name.substr(0, eq);
-        if (!in(valued, name)) throw UsageError("unknown option --" + name);
-      } else if (in(flags, name)) {
-      } else if (in(valued, name)) {
-        if (i + 1 >= argc) throw UsageError("option --" + name + " needs a value");
-        value = argv[++i];
-      } else {
-        throw UsageError("unknown option --" + name);
-      }
-      options.emplace_back(name, value);
-    } else {
-      positional.push_back(a);
-    }
-  }
-}
-
-bool Args::has(const std::string& name) const {
-  for (const auto& o : options) {
-    if (o.first == name) return true;
-  }
-  return false;
-}
-
-std::string Args::get(const std::string& name, const std::string& def) const {
-  for (auto it = options.rbegin(); it != options.rend(); ++it) {
-    if (it->first == name) return it->second;
-  }
-  return def;
-}
-
-double Args::get_double(const std::string& name, double def) const {
-  if (!has(name)) return def;
-  const std::string s = get(name);
-  char* end = nullptr;
-  const double x = std::strtod(s.c_str(), &end);
-  if (s.empty() || *end != '\0' || !std::isfinite(x)) {
-    throw UsageError("--" + name + " needs a number, got '" + s + "'");
-  }
-  return x;
-}
-
-se3::Vec3 parse_vec3(const std::string& s, const std::string& what) {
-  se3::Vec3 v;
-  const char* p = s.c_str();
-  for (int k = 0; k < 3; ++k) {
-    char* end = nullptr;
-    v[k] = std::strtod(p, &end);
-    if (end == p || !std::isfinite(v[k])) throw UsageError(what + " needs x,y,z, got '" + s + "'");
-    p = end;
-    if (k < 2) {
-      if (*p != ',') throw UsageError(what + " needs x,y,z, got '" + s + "'");
-      ++p;
-    }
-  }
-  if (*p != '\0') throw UsageError(what + " needs x,y,z, got '" + s + "'");
-  return v;
-}
-
-se3::Model load_model(const Args& args) {
-  if (args.positional.size() != 1) throw UsageError("expected one MODEL.urdf");
-  const std::string& path = args.positional[0];
-  const bool floating = args.has("floating");
-  se3::Model m;
-  if (path.compare(0, 6, "chain:") == 0) {
-    const int n = std::atoi(path.c_str() + 6);
-    if (n < 1 || n > 100000) throw InputError("chain:N needs N >= 1, got '" + path + "'");
-    m = se3::make_chain(n, floating);
-  } else {
-    se3::UrdfOptions opt;
-    opt.floating = floating;
-    m = se3::model_from_urdf_file(path, opt);
-  }
-  for (int i = 1; i <= m.n; ++i) {
-    const std::string& j = m.joint_name[i];
-    if (j.find(':') != std::string::npos || j.find(',') != std::string::npos ||
-        j.compare(0, 5, "base_") == 0) {
-      throw InputError("joint '" + j +
-                       "': names with ':' or ',' or starting with 'base_' break se3_dyn's "
-                       "columns");
-    }
-  }
-  if (args.has("gravity")) m.gravity = parse_vec3(args.get("gravity"), "--gravity");
-  return m;
-}
-
-}  // namespace se3_dyn
+#include "se3_sim/integrate.h"
 
 namespace {
 
@@ -117,19 +15,24 @@ const char* kUsage =
     "  info MODEL.urdf [--floating]\n"
     "  eval MODEL.urdf --algo rnea|aba|crba|minv [--floating] [--gravity gx,gy,gz] < in.csv\n"
     "  bench MODEL.urdf [--floating] [--algo fk,rnea,aba,crba,minv] [--json]\n"
-    "  simulate (MODEL.urdf [--floating] | --scene SCENE.yaml) [--integrator NAME] [--dt H]\n"
-    "           --duration T [--tol E] [--seed S] [--random] [--gravity gx,gy,gz]\n"
+    "  simulate (MODEL.urdf [--floating] | --scene SCENE.yaml | both) [--integrator NAME]\n"
+    "           [--dt H] --duration T [--tol E] [--seed S] [--random] [--gravity gx,gy,gz]\n"
     "           [--out traj.csv] [--json]\n"
     "  render (MODEL.urdf [--floating] | --scene S) [--camera ex,ey,ez,tx,ty,tz[,f_px]]\n"
-    "         --out frame.png\n"
-    "MODEL.urdf may also be chain:N, a generated chain of N bodies.\n";
+    "         [--package-path DIR[:DIR]] --out frame.png\n"
+    "MODEL.urdf may also be chain:N, a generated chain of N bodies (N <= 100000).\n"
+    "With both MODEL.urdf and --scene, the model replaces the scene's robot.\n"
+    "Limits on sizes and work: docs/robustness.md.\n";
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace se3_dyn;
   if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    std::FILE* out = argc < 2 ? stderr : stdout;
+    std::fputs(kUsage, out);
+    std::fprintf(out, "integrators (--integrator NAME; the registry's list):\n%s",
+                 se3::stepper_help().c_str());
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
@@ -143,6 +46,11 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     std::fprintf(stderr, "se3_dyn: %s (se3_dyn --help)\n", e.what());
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "se3_dyn: out of memory: the model or the run is too large for this machine "
+                 "(limits: docs/robustness.md)\n");
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "se3_dyn: %s\n", e.what());
     return 1;

@@ -13,13 +13,11 @@ int cmd_simulate(int argc, char** argv) {
   const Args args(argc, argv, 2, {"floating", "json", "random"},
                   {"scene", "integrator", "dt", "duration", "tol", "seed", "gravity", "out"});
   se3::SimulateOptions o;
-  if (args.has("scene")) {
-    if (!args.positional.empty()) throw UsageError("give either MODEL.urdf or --scene, not both");
-    o.scene = args.get("scene");
-  } else {
-    if (args.positional.size() != 1) throw UsageError("expected MODEL.urdf or --scene SCENE.yaml");
-    o.model = args.positional[0];
+  if (args.positional.size() > 1 || (args.positional.empty() && !args.has("scene"))) {
+    throw UsageError("expected MODEL.urdf, --scene SCENE.yaml, or both");
   }
+  o.scene = args.get("scene");
+  if (!args.positional.empty()) o.model = args.positional[0];  // replaces the scene's robot
   if (!args.has("duration")) throw UsageError("--duration T is required");
   o.floating = args.has("floating");
   o.integrator = args.get("integrator");
@@ -60,18 +58,35 @@ int cmd_simulate(int argc, char** argv) {
         fig(r.constraint_error_max).c_str());
     if (r.diverged) std::printf("diverged: %s\n", r.status.c_str());
   }
-  return r.diverged ? 1 : 0;
+  if (r.diverged) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "se3_dyn: the run diverged at t = %.6g s (step %llu): %s\n", r.sim_s,
+                 static_cast<unsigned long long>(r.steps), r.status.c_str());
+    return 1;
+  }
+  if (r.stopped) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "se3_dyn: %s\n", r.status.c_str());
+    return 1;
+  }
+  return 0;
 }
 
 int cmd_render(int argc, char** argv) {
-  const Args args(argc, argv, 2, {"floating"}, {"scene", "camera", "out", "gravity"});
+  const Args args(argc, argv, 2, {"floating"},
+                  {"scene", "camera", "out", "gravity", "package-path"});
   if (!args.has("out")) throw UsageError("--out frame.png is required");
   se3::render::RenderOptions opt;
   std::string err;
   se3::Model model;
+  se3::GeometryModel geometry;
+  // Mesh names: package:// on --package-path, then ROS_PACKAGE_PATH; relative to the URDF.
+  se3::GeometryOptions gopt;
+  gopt.paths.package_path = se3::split_path_list(args.get("package-path"));
   if (args.has("scene")) {
     const se3::Scene scene = se3::load_scene(args.get("scene"));
     model = se3::scene_model(scene);
+    geometry = se3::scene_geometry(scene, model, "", gopt);
     const se3::State s = se3::scene_state(scene, model);
     opt.base = s.base;
     opt.q = s.q;
@@ -86,11 +101,15 @@ int cmd_render(int argc, char** argv) {
     }
   } else {
     model = load_model(args);
+    const std::string& path = args.positional[0];
+    geometry = path.compare(0, 6, "chain:") == 0 ? se3::chain_geometry(model)
+                                                 : se3::geometry_from_urdf_file(model, path, gopt);
   }
+  for (const std::string& w : geometry.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (args.has("camera") && !se3::render::parse_camera_spec(args.get("camera"), opt, &err)) {
     throw UsageError("--camera: " + err);
   }
-  if (se3::render::render_to_png(model, opt, args.get("out"), &err) != 0) {
+  if (se3::render::render_to_png(model, geometry, opt, args.get("out"), &err) != 0) {
     throw InputError(err);
   }
   std::printf("wrote %s\n", args.get("out").c_str());

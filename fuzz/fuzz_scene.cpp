@@ -1,0 +1,81 @@
+// Scene YAML -> Scene (parse_scene), and for small generated robots the model and initial state
+// (scene_model, scene_state). Only SceneError and ModelError may come out. Cross-check: the
+// nesting and item bounds of check_scene_text are never below what yaml-cpp builds (for texts
+// without aliases, whose nodes are shared and would count twice).
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "se3_sim/limits.h"
+#include "se3_sim/sim.h"
+#include "sim/scene_reader.h"
+
+namespace {
+
+// Deepest collection nesting and node count of a yaml-cpp document, without recursion.
+std::pair<int, std::size_t> yaml_depth_and_nodes(const YAML::Node& root) {
+  int deepest = 0;
+  std::size_t nodes = 0;
+  std::vector<std::pair<YAML::Node, int>> todo = {{root, 0}};
+  while (!todo.empty() && nodes < 10 * se3::limits::kMaxYamlItems) {
+    const auto [n, depth] = todo.back();
+    todo.pop_back();
+    ++nodes;
+    if (!n.IsMap() && !n.IsSequence()) continue;
+    const int d = depth + 1;
+    if (d > deepest) deepest = d;
+    for (const auto& c : n) {
+      if (n.IsMap()) {
+        todo.push_back({c.first, d});
+        todo.push_back({c.second, d});
+      } else {
+        todo.push_back({YAML::Node(c), d});
+      }
+    }
+  }
+  return {deepest, nodes};
+}
+
+void check_shape(const std::string& text) {
+  if (text.size() > se3::limits::kMaxSceneBytes || text.find('*') != std::string::npos) return;
+  const se3::SceneTextShape shape = se3::scene_text_shape(text);
+  if (shape.depth > se3::limits::kMaxYamlDepth || shape.items > se3::limits::kMaxYamlItems) return;
+  // The reader parses the first document only (and refuses a second); so does this check
+  // (YAML::LoadAll of yaml-cpp 0.7 never ends on a text that starts with ',').
+  YAML::Node doc;
+  try {
+    se3::check_scene_text(text, "fuzz.yaml");
+    doc = YAML::Load(se3::with_lf_line_ends(text));
+  } catch (const std::exception&) {
+    return;
+  }
+  const auto [depth, nodes] = yaml_depth_and_nodes(doc);
+  if (depth > shape.depth || nodes > 2 * shape.items + 2) {
+    std::fprintf(stderr, "scene_text_shape says depth %d, items %zu; yaml-cpp built %d, %zu\n",
+                 shape.depth, shape.items, depth, nodes);
+    std::abort();
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  check_shape(text);
+  try {
+    const se3::Scene s = se3::parse_scene(text, "/nonexistent", "fuzz.yaml");
+    if (s.robot_path.compare(0, 6, "chain:") == 0 && std::atoi(s.robot_path.c_str() + 6) <= 16) {
+      const se3::Model m = se3::scene_model(s);
+      const se3::State x = se3::scene_state(s, m);
+      (void)x;
+    }
+  } catch (const se3::SceneError&) {
+  } catch (const se3::ModelError&) {
+  }
+  return 0;
+}

@@ -1,0 +1,71 @@
+// URDF text -> Model (model_from_urdf_string): urdfdom, tinyxml and the tree builder behind the
+// guards of src/model/urdf_guard.h. Only ModelError may come out. Two cross-checks:
+//  - the guard's nesting bound (xml_shape) is never below what tinyxml builds, so no text the
+//    guard lets through can make tinyxml recurse deeper than limits::kMaxXmlDepth;
+//  - a model that loads has finite dynamics at rest, or says why not, without UB.
+#include <tinyxml.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "model/urdf_guard.h"
+#include "se3_sim/dynamics.h"
+#include "se3_sim/limits.h"
+#include "se3_sim/model.h"
+
+namespace {
+
+// Deepest element nesting of a tinyxml document, without recursion.
+int tinyxml_depth(const TiXmlNode* root) {
+  int deepest = 0;
+  std::vector<std::pair<const TiXmlNode*, int>> todo = {{root, 0}};
+  while (!todo.empty()) {
+    const auto [node, depth] = todo.back();
+    todo.pop_back();
+    for (const TiXmlNode* c = node->FirstChild(); c; c = c->NextSibling()) {
+      const int d = depth + (c->Type() == TiXmlNode::TINYXML_ELEMENT ? 1 : 0);
+      if (d > deepest) deepest = d;
+      todo.push_back({c, d});
+    }
+  }
+  return deepest;
+}
+
+void check_shape(const std::string& xml) {
+  const se3::XmlShape shape = se3::xml_shape(xml);
+  if (se3::first_invalid_utf8(xml) < xml.size() || shape.max_depth > se3::limits::kMaxXmlDepth ||
+      shape.max_attributes > se3::limits::kMaxXmlAttributes) {
+    return;  // refused before tinyxml: nothing to compare
+  }
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());  // as urdfdom does
+  const int depth = tinyxml_depth(&doc);
+  if (depth > shape.max_depth) {
+    std::fprintf(stderr, "xml_shape says depth %d, tinyxml built %d\n", shape.max_depth, depth);
+    std::abort();
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string xml(reinterpret_cast<const char*>(data), size);
+  check_shape(xml);
+  se3::UrdfOptions opt;
+  opt.floating = size % 2 == 1;
+  try {
+    const se3::Model m = se3::model_from_urdf_string(xml, opt);
+    m.validate();
+    if (m.n <= 64) {
+      se3::Data d(m);
+      const se3::VecX q = se3::VecX::Zero(m.n), v = se3::VecX::Zero(m.nv);
+      se3::aba(m, d, se3::SE3(), q, v, v);
+      se3::crba(m, d, se3::SE3(), q);
+    }
+  } catch (const se3::ModelError&) {
+  }
+  return 0;
+}

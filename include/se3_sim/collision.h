@@ -1,0 +1,105 @@
+// The collision layer: which geometries touch, where, and how deep (docs/design.md, layers).
+//
+// A CollisionModel is a flat list of CollisionObjects, each a Shape placed on a *frame*: frames
+// are numbered by the caller (the sim layer numbers the robot's bodies first, then the scene's
+// free objects) and their world poses are passed to collide() each step; frame kWorld is the
+// world itself (static geometry: the ground, tables, static objects). The layer knows nothing of
+// models, objects or dynamics beyond that: the sim layer builds the list (the robot's URDF
+// <collision> shapes from its GeometryModel, the scene's objects, the ground) and maps frames
+// back to bodies when it builds constraint rows.
+//
+// Narrow phase and broad phase are FCL 0.7's (a dynamic AABB tree over the objects). Pairs that
+// never collide are filtered before the narrow phase: two objects on the same frame, objects
+// whose frames are adjacent (a joint between them), pairs disabled by an SRDF, robot-robot pairs
+// when self-collision is off, and static-static pairs.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "se3_sim/geometry.h"
+#include "se3_sim/lie.h"
+
+namespace se3 {
+
+/// One geometry that may touch another.
+struct CollisionObject {
+  static constexpr int kWorld = -1;
+  std::string name;        ///< for errors, reports and SRDF matching (the robot: its link name)
+  std::string link;        ///< the robot's URDF link (frame name) for SRDF pairs; "" for objects
+  int frame = kWorld;      ///< index into collide()'s poses, or kWorld (fixed in the world)
+  SE3 placement;           ///< shape frame in the frame
+  Shape shape;             ///< Box, Sphere, Cylinder, Capsule, Mesh (see CollisionOptions::mesh)
+  bool halfspace = false;  ///< the ground: the solid z <= 0 of the shape frame (shape ignored)
+  int group = 0;           ///< 0: the robot (self-collision rules apply), 1: scene objects
+  double mu = 0.8;         ///< Coulomb friction; a pair uses the larger of its two (as MuJoCo)
+  double restitution = 0;
+};
+
+/// A pair the sim layer says never collides (by frame: adjacency).
+struct FramePair {
+  int a = 0, b = 0;
+};
+
+struct CollisionOptions {
+  double margin = 0.01;         ///< m: pairs closer than this report a contact with depth < 0
+  bool self_collision = false;  ///< group-0 pairs (robot link against robot link)
+  int max_contacts_per_pair = 4;
+  /// SRDF <disable_collisions link1 link2>: link-name pairs never tested.
+  std::vector<std::pair<std::string, std::string>> disabled_links;
+  /// Frames joined by a joint (parent, child); their objects never collide.
+  std::vector<FramePair> adjacent;
+};
+
+/// A contact between objects a and b (indices into CollisionModel::objects()).
+struct Contact {
+  int a = -1, b = -1;
+  Vec3 point = Vec3::Zero();    ///< world, on the surface midway between the two
+  Vec3 normal = Vec3::UnitZ();  ///< world, unit, from a towards b
+  double depth = 0;             ///< > 0 penetration, <= 0 separation (within the margin), m
+};
+
+class CollisionModel;
+
+/// Per-step workspace: the contacts of the last collide() (capacity kept between steps).
+struct CollisionData {
+  std::vector<Contact> contacts;
+  int pairs_tested = 0;  ///< narrow-phase pairs of the last call
+};
+
+/// The objects with their FCL counterparts and the pair filter, built once. Throws
+/// std::invalid_argument with one line naming the object for a shape it cannot use (a mesh
+/// without triangles, a non-positive size).
+class CollisionModel {
+ public:
+  CollisionModel(std::vector<CollisionObject> objects, CollisionOptions options);
+  ~CollisionModel();
+  CollisionModel(CollisionModel&&) noexcept;
+  CollisionModel& operator=(CollisionModel&&) noexcept;
+
+  const std::vector<CollisionObject>& objects() const { return objects_; }
+  const CollisionOptions& options() const { return options_; }
+  /// Whether objects i and j may ever collide (the filter).
+  bool may_collide(int i, int j) const;
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::vector<CollisionObject> objects_;
+  CollisionOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The contacts at the given frame poses (world; poses[k] is frame k), deepest first per pair.
+void collide(CollisionModel& model, CollisionData& data, const std::vector<SE3>& frame_poses);
+
+/// Link-name pairs <disable_collisions link1=".." link2=".."/> of an SRDF text; throws
+/// std::invalid_argument with a one-line reason for malformed XML.
+std::vector<std::pair<std::string, std::string>> srdf_disabled_pairs(const std::string& xml);
+
+}  // namespace se3

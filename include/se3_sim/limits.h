@@ -1,0 +1,52 @@
+// Limits on what outside input may ask of the library (docs/robustness.md): file sizes and
+// nesting checked before any recursive parser (tinyxml inside urdfdom, yaml-cpp) sees a text,
+// model sizes, and the work of one headless run. Input beyond them is refused with a one-line
+// error that names the limit; nothing is truncated silently.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace se3 {
+namespace limits {
+
+// ---- URDF text (model_from_urdf_string, the simulator's robot_description)
+/// Largest URDF text: xacro-expanded real robots are well below 1 MiB.
+constexpr std::size_t kMaxUrdfBytes = 16u << 20;
+/// Deepest element nesting: URDFs need about 6 (robot, link, visual, geometry, mesh), Gazebo
+/// extensions a few more. tinyxml recurses once per level.
+constexpr int kMaxXmlDepth = 100;
+/// Most attributes on one element (tinyxml looks each new one up among the previous ones).
+constexpr int kMaxXmlAttributes = 256;
+
+// ---- models
+/// Most bodies of a model (URDF links or chain:N), base included.
+constexpr int kMaxBodies = 100000;
+/// Largest nv for the dense nv x nv results of `se3_dyn eval|bench --algo crba|minv`.
+constexpr int kMaxDenseNv = 2000;
+
+// ---- scene YAML (parse_scene, load_scene)
+/// Largest scene text (the shipped scenes are 1 to 3 kB).
+constexpr std::size_t kMaxSceneBytes = 1u << 20;
+/// Deepest nesting of lists and maps, counted conservatively before yaml-cpp parses (a block
+/// level counts twice, a flow bracket twice, a `- `, `? ` or `: ` on a line once).
+constexpr int kMaxYamlDepth = 64;
+/// Most items (a bound on keys, values and list entries, counted before yaml-cpp parses;
+/// yaml-cpp takes about 0.5 kB of memory per node).
+constexpr std::size_t kMaxYamlItems = 100000;
+
+// ---- work of one run (se3_dyn simulate, simulate_headless)
+/// Smallest time step, in a scene or on the command line (s).
+constexpr double kMinDt = 1e-9;
+/// Most steps of one headless run (duration / dt).
+constexpr std::uint64_t kMaxSteps = 100000000;
+/// Most body-steps (steps x bodies) of one headless run: about an hour of rkmk4 on this class of
+/// machine.
+constexpr double kMaxBodySteps = 1e10;
+
+// ---- `se3_dyn eval` input
+/// Largest CSV input read from stdin.
+constexpr std::size_t kMaxCsvBytes = 256u << 20;
+
+}  // namespace limits
+}  // namespace se3

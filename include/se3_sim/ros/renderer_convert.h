@@ -1,0 +1,77 @@
+// The renderer node's logic that needs ROS types but no master: message conversions, the
+// camera command and camera_info, the RViz MarkerArray of the draw list, following a frame,
+// where save_frame writes, and mesh resolution through ROS's own package lookup.
+#pragma once
+
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
+#include <geometry_msgs/Twist.h>
+#include <ros/time.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <visualization_msgs/Marker.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <string>
+#include <vector>
+
+#include "se3_sim/geometry.h"
+#include "se3_sim/render.h"
+
+namespace se3 {
+namespace ros_renderer {
+
+/// A pose from a transform; a zero or non-finite quaternion or translation gives NaNs (the
+/// renderer hides what has no valid pose).
+SE3 to_se3(const geometry_msgs::Transform& t);
+/// A marker pose; an all-zero orientation means identity (as RViz reads it).
+SE3 to_se3(const geometry_msgs::Pose& p);
+geometry_msgs::Pose to_pose(const SE3& f);
+
+/// Appends the render markers of one visualization_msgs/Marker whose frame is at `frame` in
+/// the renderer's fixed frame: SPHERE, CUBE, ARROW, POINTS, SPHERE_LIST, LINE_STRIP,
+/// LINE_LIST (others are ignored). Non-finite input adds nothing.
+void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
+                    std::vector<render::Marker>& out);
+
+/// One camera_command step (the convention in render.h) applied to cam.
+void apply_camera_command(const geometry_msgs::Twist& cmd, render::Camera& cam);
+
+/// camera_info of the renderer's pinhole (ROS puts the centre of the top-left pixel at 0, 0).
+sensor_msgs::CameraInfo camera_info(const render::Camera& cam, const std::string& frame,
+                                    const ros::Time& stamp);
+
+/// The draw list for RViz: one marker per item, in its link's frame (frame_locked), namespace
+/// ns, ids from 0: MESH_RESOURCE with the mesh's URI and scale where the item is a mesh,
+/// CUBE / SPHERE / CYLINDER for primitives, a capsule as a cylinder and two spheres.
+/// `link_offset_inv[k]` maps item k's body frame to its link frame (link = body * offset).
+visualization_msgs::MarkerArray rviz_markers(const std::vector<render::DrawItem>& items,
+                                             const std::vector<SE3>& link_offset_inv,
+                                             const ros::Time& stamp, const std::string& ns);
+
+/// Keeps the camera's offset from a moving frame: the first update() records eye and target
+/// relative to the frame's origin; later ones move both with it. A camera changed by the user
+/// (set_camera) keeps its new offset.
+class FollowCamera {
+ public:
+  /// Returns the camera to draw with, given the frame origin (world) now.
+  render::Camera update(const render::Camera& cam, const Vec3& origin);
+  /// The user moved the camera while following at `origin`.
+  void set_camera(const render::Camera& cam, const Vec3& origin);
+  bool started() const { return started_; }
+
+ private:
+  bool started_ = false;
+  Vec3 eye_offset_ = Vec3::Zero(), target_offset_ = Vec3::Zero();
+};
+
+/// A new file dir/se3_sim_frame_NNNNNN.png that did not exist (created empty, exclusively, so
+/// two renderers never pick the same name): the counter advances past taken names. Returns ""
+/// with a reason in *error when dir is not writable.
+std::string reserve_frame_path(const std::string& dir, int& counter, std::string* error);
+
+/// Mesh names resolved the ROS way: package:// through ros::package (rospack), file:// and
+/// paths by the library's resolver (relative ones against base_dir).
+ResourceResolver ros_resolver(const std::string& base_dir = "");
+
+}  // namespace ros_renderer
+}  // namespace se3

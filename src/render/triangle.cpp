@@ -1,0 +1,409 @@
+// Triangles: half-space edge functions on sub-pixel integer vertices, Gouraud shade and
+// inverse depth as screen-space planes, an SSE2 path four pixels wide and a scalar path that
+// computes the same bits.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "se3_sim/render/raster.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define SE3_RASTER_SSE2 1
+#endif
+
+namespace se3 {
+namespace render {
+namespace {
+
+constexpr int kHalf = kSubpixel / 2;
+
+// floor(a / b) and ceil(a / b) for b > 0.
+inline int64_t floor_div(int64_t a, int64_t b) {
+  return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+inline int64_t ceil_div(int64_t a, int64_t b) {
+  return a >= 0 ? (a + b - 1) / b : -((-a) / b);
+}
+
+// A triangle ready for the pixel loops: its pixel box, each edge's value at the box's first
+// pixel centre with the top-left rule folded in (covered <=> all three >= 0), the edges'
+// steps per pixel (x: ex, y: ey), and the planes of inverse depth z and shade k. Integers fit
+// in 32 bits: coordinates relative to the box stay below 2^14 + 16 in magnitude (larger
+// triangles are split first), so every edge value stays below 2^30.
+struct Setup {
+  int bx0, by0, bx1, by1;
+  int32_t e0[3], ex[3], ey[3];
+  float z0, zx, zy, k0, kx, ky;
+};
+
+inline float min255(float x) {
+  return x < 255.0f ? x : 255.0f;  // as _mm_min_ps(x, 255)
+}
+
+inline uint32_t shade(const float rgb[3], float k) {
+  const uint32_t r = uint32_t(int32_t(min255(rgb[0] * k)));
+  const uint32_t g = uint32_t(int32_t(min255(rgb[1] * k)));
+  const uint32_t b = uint32_t(int32_t(min255(rgb[2] * k)));
+  return (r << 16) | (g << 8) | b;
+}
+
+// Columns [i0, i1] of a row (relative to bx0) where every edge value er[k] + i ex[k] >= 0.
+// Narrow boxes are scanned whole (three divisions cost more than a few pixel tests).
+constexpr int kSpanMin = 12;
+inline bool row_span(const int32_t er[3], const int32_t ex[3], int n, int& i0, int& i1) {
+  i0 = 0;
+  i1 = n - 1;
+  if (n < kSpanMin) return true;
+  for (int k = 0; k < 3; ++k) {
+    if (ex[k] > 0) {
+      i0 = std::max(i0, int(ceil_div(-int64_t(er[k]), ex[k])));
+    } else if (ex[k] < 0) {
+      i1 = std::min(i1, int(floor_div(int64_t(er[k]), -int64_t(ex[k]))));
+    } else if (er[k] < 0) {
+      return false;
+    }
+  }
+  return i0 <= i1;
+}
+
+struct Target {
+  int W, H;
+  uint32_t* color;
+  float* depth;
+  RowSet rows;
+};
+
+// The pixel loops. Row by row: edge values step by ey, the planes' row values by zy and ky
+// (float additions, the same in both paths); a pixel's z and k are row value + step * column.
+void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
+  const int n = s.bx1 - s.bx0 + 1;
+  int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
+  float zr = s.z0, kr = s.k0;
+  for (int y = s.by0; y <= s.by1;
+       ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2], zr += s.zy, kr += s.ky) {
+    if (!T.rows.has(y)) continue;
+    int i0, i1;
+    if (!row_span(er, s.ex, n, i0, i1)) continue;
+    uint32_t* crow = T.color + std::size_t(y) * T.W + s.bx0;
+    float* drow = T.depth + std::size_t(y) * T.W + s.bx0;
+    for (int i = i0; i <= i1; ++i) {
+      if ((er[0] + i * s.ex[0]) < 0 || (er[1] + i * s.ex[1]) < 0 || (er[2] + i * s.ex[2]) < 0) {
+        continue;
+      }
+      const float fi = float(i);
+      const float z = zr + s.zx * fi;
+      if (z > drow[i]) {
+        drow[i] = z;
+        crow[i] = shade(rgb, kr + s.kx * fi);
+      }
+    }
+  }
+}
+
+#if SE3_RASTER_SSE2
+// Four pixels at columns x .. x + 3 (relative column ii) of a row: edge lanes e, planes' row
+// values zr, kr.
+inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __m128 kr, __m128 zx,
+                       __m128 kx, const __m128 c[3], uint32_t* crow, float* drow) {
+  const __m128i outside = _mm_srai_epi32(_mm_or_si128(_mm_or_si128(e0, e1), e2), 31);
+  const __m128 fi = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(ii), _mm_setr_epi32(0, 1, 2, 3)));
+  const __m128 z = _mm_add_ps(zr, _mm_mul_ps(zx, fi));
+  const __m128 d = _mm_loadu_ps(drow);
+  const __m128 m = _mm_andnot_ps(_mm_castsi128_ps(outside), _mm_cmpgt_ps(z, d));
+  if (!_mm_movemask_ps(m)) return;
+  _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+  const __m128 k = _mm_add_ps(kr, _mm_mul_ps(kx, fi));
+  const __m128 c255 = _mm_set1_ps(255.0f);
+  const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[0], k), c255));
+  const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[1], k), c255));
+  const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[2], k), c255));
+  const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+  const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+  const __m128i mi = _mm_castps_si128(m);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
+                   _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+}
+
+void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
+  const int n = s.bx1 - s.bx0 + 1;
+  const int W = T.W;
+  const __m128 zx = _mm_set1_ps(s.zx), kx = _mm_set1_ps(s.kx);
+  const __m128 c[3] = {_mm_set1_ps(rgb[0]), _mm_set1_ps(rgb[1]), _mm_set1_ps(rgb[2])};
+  // Each edge at the row's first four columns, stepped down a row at a time.
+  __m128i ev[3], eyv[3], ex4[3];
+  for (int k = 0; k < 3; ++k) {
+    ev[k] =
+        _mm_setr_epi32(s.e0[k], s.e0[k] + s.ex[k], s.e0[k] + 2 * s.ex[k], s.e0[k] + 3 * s.ex[k]);
+    eyv[k] = _mm_set1_epi32(s.ey[k]);
+    ex4[k] = _mm_set1_epi32(4 * s.ex[k]);
+  }
+  // Groups of four from the box's left column never pass the image's right border unless
+  // the box ends within three columns of it; then a group shifts left (its extra lanes are
+  // outside the box and fail the edge test).
+  const bool border = s.bx0 + ((n + 3) & ~3) > W;
+  const bool all_rows = T.rows.parts == 1;
+  int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
+  float zrs = s.z0, krs = s.k0;
+  for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
+           zrs += s.zy, krs += s.ky, ev[0] = _mm_add_epi32(ev[0], eyv[0]),
+           ev[1] = _mm_add_epi32(ev[1], eyv[1]), ev[2] = _mm_add_epi32(ev[2], eyv[2])) {
+    if (!all_rows && !T.rows.has(y)) continue;
+    int i0 = 0, i1 = n - 1;
+    if (n >= kSpanMin && !row_span(er, s.ex, n, i0, i1)) continue;
+    const __m128 zr = _mm_set1_ps(zrs), kr = _mm_set1_ps(krs);
+    uint32_t* crow = T.color + std::size_t(y) * W + s.bx0;
+    float* drow = T.depth + std::size_t(y) * W + s.bx0;
+    if (!border) {
+      int i = i0 & ~3;  // groups aligned to the box's left column
+      __m128i e0 = ev[0], e1 = ev[1], e2 = ev[2];
+      if (i) {
+        e0 = _mm_add_epi32(e0, _mm_set1_epi32(i * s.ex[0]));
+        e1 = _mm_add_epi32(e1, _mm_set1_epi32(i * s.ex[1]));
+        e2 = _mm_add_epi32(e2, _mm_set1_epi32(i * s.ex[2]));
+      }
+      for (; i <= i1; i += 4, e0 = _mm_add_epi32(e0, ex4[0]), e1 = _mm_add_epi32(e1, ex4[1]),
+                              e2 = _mm_add_epi32(e2, ex4[2])) {
+        group_sse2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+      }
+    } else {
+      for (int i = i0 & ~3; i <= i1; i += 4) {
+        const int ii = std::min(i, W - 4 - s.bx0);
+        const __m128i e0 = _mm_add_epi32(ev[0], _mm_set1_epi32(ii * s.ex[0]));
+        const __m128i e1 = _mm_add_epi32(ev[1], _mm_set1_epi32(ii * s.ex[1]));
+        const __m128i e2 = _mm_add_epi32(ev[2], _mm_set1_epi32(ii * s.ex[2]));
+        group_sse2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+      }
+    }
+  }
+}
+#endif
+
+// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most eight pixels
+// are drawn here pixel by pixel (most triangles of a detailed mesh; the same code serves both
+// paths), the rest go to the pixel loops.
+void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+              const float rgb[3], const Target& T, bool simd);
+constexpr int32_t kMaxExtent = 1 << 14;
+
+template <bool kSimd>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void
+draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t by_, float bz,
+              float bk, int32_t cx_, int32_t cy_, float cz, float ck, const float rgb[3],
+              const Target& T) {
+  const int32_t minx = std::min(ax_, std::min(bx_, cx_)), maxx = std::max(ax_, std::max(bx_, cx_));
+  const int32_t miny = std::min(ay_, std::min(by_, cy_)), maxy = std::max(ay_, std::max(by_, cy_));
+  if (maxx - minx > kMaxExtent || maxy - miny > kMaxExtent) {
+    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kSimd);
+    return;
+  }
+  // Pixels whose centre (16 i + 8) lies in [min, max]: arithmetic shifts round down.
+  const int bx0 = std::max(0, (minx + kHalf - 1) >> 4);
+  const int bx1 = std::min(T.W - 1, (maxx - kHalf) >> 4);
+  if (bx0 > bx1) return;
+  const int by0 = std::max(0, (miny + kHalf - 1) >> 4);
+  const int by1 = std::min(T.H - 1, (maxy - kHalf) >> 4);
+  if (by0 > by1) return;
+  if (T.rows.parts > 1 && (by0 >> T.rows.shift) == (by1 >> T.rows.shift) && !T.rows.has(by0)) {
+    return;  // one band, another thread's
+  }
+  const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
+  // Relative to the box's first centre.
+  const int32_t ax = ax_ - ox, ay = ay_ - oy;
+  int32_t bx = bx_ - ox, by = by_ - oy, cx = cx_ - ox, cy = cy_ - oy;
+  int32_t area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+  if (area == 0) return;
+  if (area > 0) {  // canonical winding: every edge function is positive inside
+    std::swap(bx, cx);
+    std::swap(by, cy);
+    std::swap(bz, cz);
+    std::swap(bk, ck);
+    area = -area;
+  }
+  // Edge 0 runs a -> b, 1 b -> c, 2 c -> a; edge i weighs the vertex opposite it.
+  const int32_t dx0 = bx - ax, dy0 = by - ay, dx1 = cx - bx, dy1 = cy - by;
+  const int32_t dx2 = ax - cx, dy2 = ay - cy;
+  const int32_t e0 = ay * dx0 - ax * dy0, e1 = by * dx1 - bx * dy1, e2 = cy * dx2 - cx * dy2;
+  // Top-left rule: a pixel centre on an edge belongs to the triangle if the edge is a left
+  // edge (dy > 0 here) or a top one (dy == 0, dx < 0).
+  const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
+  const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
+  const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
+  const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
+  if (w <= 4 && h <= 4 && w * h <= 8) {
+    // Which of the (at most eight) centres are covered; only then the planes.
+    unsigned covered = 0;
+    for (int j = 0; j < h; ++j) {
+      const int32_t sy = kSubpixel * j;
+      for (int i = 0; i < w; ++i) {
+        const int32_t sx = kSubpixel * i;
+        if (((t0 + sx * dy0 - sy * dx0) | (t1 + sx * dy1 - sy * dx1) |
+             (t2 + sx * dy2 - sy * dx2)) >= 0) {
+          covered |= 1u << (4 * j + i);
+        }
+      }
+    }
+    if (!covered) return;
+    const float inv = 1.0f / float(-area);
+    const float wa = az * inv, wb = bz * inv, wc = cz * inv;
+    const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
+    for (int j = 0; j < h; ++j) {
+      const int y = by0 + j;
+      if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
+      const int32_t sy = kSubpixel * j;
+      for (int i = 0; i < w; ++i) {
+        if (!(covered >> (4 * j + i) & 1u)) continue;
+        const int32_t sx = kSubpixel * i;
+        const float ff0 = float(e0 + sx * dy0 - sy * dx0), ff1 = float(e1 + sx * dy1 - sy * dx1);
+        const float ff2 = float(e2 + sx * dy2 - sy * dx2);
+        const float z = ff0 * wc + ff1 * wa + ff2 * wb;
+        const std::size_t at = std::size_t(y) * T.W + bx0 + i;
+        if (z > T.depth[at]) {
+          T.depth[at] = z;
+          T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
+        }
+      }
+    }
+    return;
+  }
+  const float inv = 1.0f / float(-area);
+  const float wa = az * inv, wb = bz * inv, wc = cz * inv;
+  const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
+  Setup s;
+  s.bx0 = bx0;
+  s.bx1 = bx1;
+  s.by0 = by0;
+  s.by1 = by1;
+  s.e0[0] = t0;
+  s.e0[1] = t1;
+  s.e0[2] = t2;
+  s.ex[0] = kSubpixel * dy0;
+  s.ex[1] = kSubpixel * dy1;
+  s.ex[2] = kSubpixel * dy2;
+  s.ey[0] = -kSubpixel * dx0;
+  s.ey[1] = -kSubpixel * dx1;
+  s.ey[2] = -kSubpixel * dx2;
+  const float fe0 = float(e0), fe1 = float(e1), fe2 = float(e2);
+  const float fx0 = float(s.ex[0]), fx1 = float(s.ex[1]), fx2 = float(s.ex[2]);
+  const float fy0 = float(s.ey[0]), fy1 = float(s.ey[1]), fy2 = float(s.ey[2]);
+  s.z0 = fe0 * wc + fe1 * wa + fe2 * wb;
+  s.zx = fx0 * wc + fx1 * wa + fx2 * wb;
+  s.zy = fy0 * wc + fy1 * wa + fy2 * wb;
+  s.k0 = fe0 * uc + fe1 * ua + fe2 * ub;
+  s.kx = fx0 * uc + fx1 * ua + fx2 * ub;
+  s.ky = fy0 * uc + fy1 * ua + fy2 * ub;
+#if SE3_RASTER_SSE2
+  if (kSimd) {
+    raster_sse2(s, rgb, T);
+    return;
+  }
+#endif
+  raster_scalar(s, rgb, T);
+}
+
+// Draws a triangle of any extent: one larger than 2^14 sub-pixels (1024 pixels: a big image,
+// a near face) is drawn as four, which share their new edges exactly.
+void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+              const float rgb[3], const Target& T, bool simd) {
+  const int64_t ext =
+      std::max(int64_t(std::max(a.x, std::max(b.x, c.x))) - std::min(a.x, std::min(b.x, c.x)),
+               int64_t(std::max(a.y, std::max(b.y, c.y))) - std::min(a.y, std::min(b.y, c.y)));
+  if (ext > int64_t(kMaxExtent)) {
+    auto mid = [](const RasterVertex& p, const RasterVertex& q) {
+      RasterVertex m;
+      m.x = int32_t((int64_t(p.x) + q.x) >> 1);
+      m.y = int32_t((int64_t(p.y) + q.y) >> 1);
+      m.z = 0.5f * (p.z + q.z);
+      m.k = 0.5f * (p.k + q.k);
+      return m;
+    };
+    const RasterVertex ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+    draw_any(a, ab, ca, rgb, T, simd);
+    draw_any(ab, b, bc, rgb, T, simd);
+    draw_any(ca, bc, c, rgb, T, simd);
+    draw_any(ab, bc, ca, rgb, T, simd);
+    return;
+  }
+  if (simd) {
+    draw_triangle<true>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  } else {
+    draw_triangle<false>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  }
+}
+
+template <bool kSimd>
+std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3],
+                    bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
+  std::size_t drawn = 0;
+  const uint32_t* end = t + 3 * count;
+  for (; t < end; t += 3) {
+    const uint32_t a = t[0], b = t[1], c = t[2];
+    const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
+    if (oa | ob | oc) {
+      if (!(oa & ob & oc) && clip) drawn += clip(ctx, a, b, c);  // rare: clipped in 4-D
+      continue;
+    }
+    const int32_t ax = v.x[a], ay = v.y[a], bx = v.x[b], by = v.y[b], cx = v.x[c], cy = v.y[c];
+    const int64_t area = int64_t(bx - ax) * (cy - ay) - int64_t(cx - ax) * (by - ay);
+    if (area == 0) continue;
+    // Screen y runs down: a triangle counter-clockwise as seen has area < 0 here.
+    const bool front = (area < 0) == outward;
+    if (!front && cull) continue;
+    ++drawn;
+    const float* k = front ? v.kf : v.kb;
+    draw_triangle<kSimd>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+  }
+  return drawn;
+}
+
+}  // namespace
+
+bool raster_has_simd() {
+#if SE3_RASTER_SSE2
+  return true;
+#else
+  return false;
+#endif
+}
+
+void Framebuffer::fill_triangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+                                const float rgb[3], const RowSet& rows) {
+  const Target T{width_, height_, color_.data(), depth_.data(), rows};
+  draw_any(a, b, c, rgb, T, simd_ && width_ >= 4);
+}
+
+std::size_t Framebuffer::fill_indexed(const VertexArrays& v, const uint32_t* idx, std::size_t count,
+                                      const float rgb[3], bool cull, bool outward,
+                                      const RowSet& rows, ClipCallback clip, void* ctx) {
+  const Target T{width_, height_, color_.data(), depth_.data(), rows};
+#if SE3_RASTER_SSE2
+  if (simd_ && width_ >= 4) return indexed<true>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+#endif
+  return indexed<false>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+}
+
+void Framebuffer::fill_triangle(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c,
+                                uint32_t color) {
+  auto snap = [](const ScreenVertex& s) {
+    RasterVertex v;
+    v.x = int32_t(std::lrint(double(s.x) * kSubpixel));
+    v.y = int32_t(std::lrint(double(s.y) * kSubpixel));
+    v.z = s.inv_depth;
+    v.k = 1.0f;
+    return v;
+  };
+  // Finite and not absurdly far off the image (callers clip to the guard band).
+  const float lim = 4.0f * float(width_ + height_) + 2048.0f;
+  for (const ScreenVertex* s : {&a, &b, &c}) {
+    if (!(std::abs(s->x) < lim) || !(std::abs(s->y) < lim)) return;
+  }
+  const float rgb[3] = {float((color >> 16) & 0xff), float((color >> 8) & 0xff),
+                        float(color & 0xff)};
+  fill_triangle(snap(a), snap(b), snap(c), rgb);
+}
+
+}  // namespace render
+}  // namespace se3

@@ -1,0 +1,196 @@
+// The renderer node's logic without a master (src/ros/renderer_convert.h): camera_info, the
+// RViz MarkerArray (MESH_RESOURCE with the URDF's package:// names), sim markers, the camera
+// command, following a frame, save_frame's paths, mesh resolution through rospack.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "se3_sim/ros/renderer_convert.h"
+
+#ifndef SE3_SIM_SOURCE_DIR
+#define SE3_SIM_SOURCE_DIR "."
+#endif
+
+using namespace se3;
+namespace rr = se3::ros_renderer;
+namespace fs = std::filesystem;
+
+TEST(RosRenderer, CameraInfoIsThePinhole) {
+  render::Camera cam;
+  cam.focal_px = 900;
+  cam.update();
+  const sensor_msgs::CameraInfo info = rr::camera_info(cam, "cam", ros::Time(3, 0));
+  EXPECT_EQ(info.width, 1280u);
+  EXPECT_EQ(info.height, 1024u);
+  EXPECT_EQ(info.header.frame_id, "cam");
+  EXPECT_EQ(info.K[0], 900);
+  EXPECT_EQ(info.K[4], 900);
+  // ROS puts the centre of pixel (0, 0) at (0, 0); ours is at (0.5, 0.5).
+  EXPECT_EQ(info.K[2], 639.5);
+  EXPECT_EQ(info.K[5], 511.5);
+  EXPECT_EQ(info.P[2], 639.5);
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+}
+
+TEST(RosRenderer, RvizMarkersNameTheMeshes) {
+  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const Model m = model_from_urdf_file(urdf);
+  GeometryOptions go;
+  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
+  const auto items = render::make_draw_items(m, g);
+  std::vector<SE3> inv;
+  for (const auto& it : items) inv.push_back(m.links[m.link_index(it.link)].offset.inverse());
+  const auto arr = rr::rviz_markers(items, inv, ros::Time(1, 0), "robot");
+  ASSERT_EQ(arr.markers.size(), items.size());
+  std::set<int> ids;
+  for (const auto& mk : arr.markers) {
+    ids.insert(mk.id);
+    EXPECT_EQ(mk.type, visualization_msgs::Marker::MESH_RESOURCE);
+    EXPECT_EQ(mk.mesh_resource.rfind(
+                  "package://example-robot-data/robots/panda_description/meshes/visual/", 0),
+              0u)
+        << mk.mesh_resource;
+    EXPECT_TRUE(mk.mesh_use_embedded_materials);  // the Collada files carry colours
+    EXPECT_TRUE(mk.frame_locked);
+    EXPECT_NE(mk.header.frame_id, "");
+    EXPECT_EQ(mk.scale.x, 1.0);
+  }
+  EXPECT_EQ(ids.size(), arr.markers.size());
+  // A link's visual at the link's own origin (panda_link1's mesh has no URDF origin).
+  for (std::size_t k = 0; k < items.size(); ++k) {
+    if (items[k].link != "panda_link1") continue;
+    const auto& p = arr.markers[k].pose;
+    EXPECT_NEAR(p.position.x, 0, 1e-12);
+    EXPECT_NEAR(p.position.z, 0, 1e-12);
+    EXPECT_NEAR(std::abs(p.orientation.w), 1, 1e-12);
+  }
+
+  // Primitives and stand-ins: a capsule is a cylinder and two balls.
+  const std::string xml = R"(<robot name="p"><link name="a">
+    <visual><geometry><box size="1 2 3"/></geometry></visual>
+    <visual><geometry><mesh filename="package://nowhere/x.stl"/></geometry></visual></link>
+    <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <joint name="j" type="continuous"><parent link="a"/><child link="b"/><origin xyz="0 0 1"/></joint></robot>)";
+  const Model pm = model_from_urdf_string(xml);
+  GeometryOptions none;
+  none.paths.use_ros_package_path = false;
+  const GeometryModel pg = geometry_from_urdf_string(pm, xml, none);
+  const auto pitems = render::make_draw_items(pm, pg);
+  const auto parr = rr::rviz_markers(pitems, std::vector<SE3>(pitems.size()), ros::Time(), "p");
+  ASSERT_EQ(parr.markers.size(), 4u);
+  EXPECT_EQ(parr.markers[0].type, visualization_msgs::Marker::CUBE);
+  EXPECT_EQ(parr.markers[0].scale.y, 2.0);
+  EXPECT_EQ(parr.markers[1].type, visualization_msgs::Marker::CYLINDER);
+  EXPECT_EQ(parr.markers[2].type, visualization_msgs::Marker::SPHERE);
+  EXPECT_EQ(parr.markers[3].type, visualization_msgs::Marker::SPHERE);
+  EXPECT_NEAR(parr.markers[3].pose.position.z - parr.markers[2].pose.position.z, 1.0, 1e-12);
+}
+
+TEST(RosRenderer, SimMarkersAndCameraCommand) {
+  visualization_msgs::Marker m;
+  m.type = visualization_msgs::Marker::CUBE;
+  m.pose.position.x = 1;
+  m.scale.x = 0.5;
+  m.scale.y = 0.6;
+  m.scale.z = 0.7;
+  m.color.r = 1;
+  std::vector<render::Marker> out;
+  rr::append_markers(m, SE3(Mat3::Identity(), Vec3(0, 0, 2)), out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].type, render::Marker::Type::Box);
+  EXPECT_TRUE(out[0].a.isApprox(Vec3(1, 0, 2)));
+  EXPECT_TRUE(out[0].size3.isApprox(Vec3(0.5, 0.6, 0.7)));
+  m.pose.position.x = std::nan("");
+  rr::append_markers(m, SE3(), out);
+  EXPECT_EQ(out.size(), 1u);  // non-finite: nothing
+  m.type = visualization_msgs::Marker::LINE_STRIP;
+  m.pose.position.x = 0;
+  m.points.resize(3);
+  rr::append_markers(m, SE3(), out);
+  EXPECT_EQ(out.size(), 3u);
+
+  render::Camera cam;
+  cam.update();
+  const double d0 = (cam.eye - cam.target).norm();
+  geometry_msgs::Twist t;
+  t.linear.x = 0.5;
+  t.angular.z = std::nan("");
+  rr::apply_camera_command(t, cam);
+  EXPECT_NEAR((cam.eye - cam.target).norm(), 0.5 * d0, 1e-9);
+  EXPECT_TRUE(cam.P.allFinite());
+}
+
+// follow_frame: the camera keeps its offset from a moving frame, and a user's change of view
+// is kept as the new offset.
+TEST(RosRenderer, FollowCameraKeepsItsOffset) {
+  render::Camera cam;
+  cam.eye = Vec3(2, -2, 1);
+  cam.target = Vec3(0, 0, 0.5);
+  cam.update();
+  rr::FollowCamera follow;
+  EXPECT_FALSE(follow.started());
+  render::Camera c = follow.update(cam, Vec3(0, 0, 0));
+  EXPECT_TRUE(c.eye.isApprox(cam.eye));
+  c = follow.update(cam, Vec3(0, 0, -3));  // the robot fell 3 m
+  EXPECT_TRUE(c.eye.isApprox(Vec3(2, -2, -2)));
+  EXPECT_TRUE(c.target.isApprox(Vec3(0, 0, -2.5)));
+  render::Camera user = c;
+  user.eye = Vec3(1, -1, -2);
+  follow.set_camera(user, Vec3(0, 0, -3));
+  c = follow.update(user, Vec3(1, 0, -3));
+  EXPECT_TRUE(c.eye.isApprox(Vec3(2, -1, -2)));
+  c = follow.update(user, Vec3::Constant(std::nan("")));  // no TF: as it is
+  EXPECT_TRUE(c.eye.isApprox(user.eye));
+}
+
+TEST(RosRenderer, SaveFramePathsNeverRepeat) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "se3_save_frames";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "se3_sim_frame_000001.png") << "earlier";
+  int counter = 0;
+  std::set<std::string> paths;
+  for (int i = 0; i < 4; ++i) {
+    std::string err;
+    const std::string p = rr::reserve_frame_path(dir.string(), counter, &err);
+    ASSERT_FALSE(p.empty()) << err;
+    EXPECT_TRUE(fs::exists(p));
+    paths.insert(p);
+  }
+  EXPECT_EQ(paths.size(), 4u);
+  EXPECT_EQ(paths.count((dir / "se3_sim_frame_000001.png").string()), 0u);  // taken before
+  std::ifstream earlier(dir / "se3_sim_frame_000001.png");
+  std::string text;
+  earlier >> text;
+  EXPECT_EQ(text, "earlier");
+  int c2 = 0;
+  std::string err;
+  EXPECT_EQ(rr::reserve_frame_path("/nonexistent-dir-for-se3", c2, &err), "");
+  EXPECT_FALSE(err.empty());
+}
+
+// package:// through rospack (ROS_PACKAGE_PATH), as the node resolves meshes.
+TEST(RosRenderer, RosResolverUsesRospack) {
+  const std::string meshes = std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes";
+  setenv("ROS_PACKAGE_PATH", meshes.c_str(), 1);
+  const ResourceResolver resolve = rr::ros_resolver();
+  std::string err;
+  const std::string p = resolve(
+      "package://example-robot-data/robots/panda_description/meshes/visual/link1.dae", &err);
+  ASSERT_FALSE(p.empty()) << err;
+  EXPECT_TRUE(fs::exists(p));
+  EXPECT_EQ(resolve("package://no_such_package_here/x.stl", &err), "");
+  EXPECT_NE(err.find("no_such_package_here"), std::string::npos) << err;
+  EXPECT_EQ(resolve("package://example-robot-data/none.stl", &err), "");
+  EXPECT_NE(err.find("not found"), std::string::npos) << err;
+}
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
