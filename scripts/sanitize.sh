@@ -33,8 +33,12 @@ slow+=":Contact.Solo12WithFreeJointsFallsAndComesToRest:Variational.ConservesMom
 slow+=":Dynamics.EquationsOfMotion:SinCos.RandomArgumentsWithinOneUlp:Stiff.*"
 filter=${SE3_SANITIZE_GTEST_FILTER:-"-$slow"}
 
-ws="$repo/.build/san/ws"
-mkdir -p "$ws/src" "$results"
+# The sanitizer workspace lives beside the clone, as the main one does (scripts/env.sh): inside,
+# its link back to the package would be a loop for rosrun's search of the package folder.
+ws="${SE3_SIM_SAN_WS:-$(dirname "$repo")/$(basename "$repo")_san_ws}"
+mkdir -p "$ws/src" "$results" "$repo/.build/san"
+# Earlier versions kept it in .build/san/ws, linked back to the clone: the loop goes.
+[[ -L "$repo/.build/san/ws/src/se3_sim" ]] && rm -rf "$repo/.build/san/ws"
 [[ -L "$ws/src/se3_sim" ]] || ln -sfn "$repo" "$ws/src/se3_sim"
 log="$repo/.build/san/build.log"
 san="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
@@ -56,7 +60,7 @@ declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes"
   [controllers]="config/controllers")
 
 t0=$(date +%s)
-echo "se3_sim: sanitizer build (clang, ASan + UBSan) in .build/san (log: .build/san/build.log)"
+echo "se3_sim: sanitizer build (clang, ASan + UBSan) in $ws (log: .build/san/build.log)"
 cd "$ws"
 # RelWithDebInfo at -O1 with line tables and assertions on (Eigen's index checks included):
 # fast enough to run the suite, slow enough to keep stack traces exact.
