@@ -88,17 +88,25 @@ std::string urdf_text_quirks(const std::string& xml, std::vector<std::string>& w
 void urdf_model_quirks(urdf::ModelInterface& u, std::vector<std::pair<std::string, double>>& lock,
                        std::vector<std::string>& warnings) {
   std::vector<std::string> no_range, no_effort, mimic, massless;
-  // Mass below each link (its own and its descendants').
+  // Mass below each link (its own and its descendants'), without recursion: a URDF may be a
+  // chain of thousands of links (urdf_guard.h bounds them, not the stack).
   std::map<std::string, double> below;
-  std::function<double(const urdf::Link&)> mass_below = [&](const urdf::Link& l) {
-    double m = l.inertial ? std::max(0.0, l.inertial->mass) : 0.0;
-    for (const auto& c : l.child_links) {
-      if (c) m += mass_below(*c);
+  if (u.getRoot()) {
+    std::vector<const urdf::Link*> order = {u.getRoot().get()};  // parents before children
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      for (const auto& c : order[k]->child_links) {
+        if (c) order.push_back(c.get());
+      }
     }
-    below[l.name] = m;
-    return m;
-  };
-  if (u.getRoot()) mass_below(*u.getRoot());
+    for (auto it = order.rbegin(); it != order.rend(); ++it) {
+      const urdf::Link& l = **it;
+      double m = l.inertial ? std::max(0.0, l.inertial->mass) : 0.0;
+      for (const auto& c : l.child_links) {
+        if (c) m += below[c->name];
+      }
+      below[l.name] = m;
+    }
+  }
   for (auto& kv : u.joints_) {
     urdf::Joint& j = *kv.second;
     const bool moving = j.type == urdf::Joint::REVOLUTE || j.type == urdf::Joint::CONTINUOUS ||
