@@ -210,8 +210,12 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
       const double* p3 = Pp.row(3).data();
       const double* p4 = Pp.row(4).data();
       const double* p5 = Pp.row(5).data();
+      // Column `row` of P_i is read by nobody (the descendants read columns past their own
+      // rows), so the first column only finishes row i (r[row] is the diagonal entry itself).
+      r[row] -=
+          w0 * p0[row] + w1 * p1[row] + w2 * p2[row] + w3 * p3[row] + w4 * p4[row] + w5 * p5[row];
 #pragma GCC ivdep
-      for (int j = row; j < nv; ++j) {
+      for (int j = row + 1; j < nv; ++j) {
         const double a0 = p0[j], a1 = p1[j], a2 = p2[j], a3 = p3[j], a4 = p4[j], a5 = p5[j];
         const double x =
             r[j] - (w0 * a0 + w1 * a1 + w2 * a2 + w3 * a3 + w4 * a4 + w5 * a5);  // (58)
@@ -226,7 +230,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
       }
     } else {
 #pragma GCC ivdep
-      for (int j = row; j < nv; ++j) {
+      for (int j = row + 1; j < nv; ++j) {
         const double x = r[j];
         mrow[static_cast<std::ptrdiff_t>(j) * nv] = x;
         q0[j] = s0 * x;
