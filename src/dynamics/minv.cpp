@@ -15,6 +15,53 @@
 #include "se3_sim/dynamics.h"
 
 namespace se3 {
+namespace {
+
+// The body's inertia J placed at f (the world frame for f = oMb), as the upper triangle of its
+// 6x6 matrix (eq. 23) in out; the lower triangle is left as it was. With g = R h: h' = g + m p,
+// I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2 (Inertia::transformed,
+// written straight into the matrix the recursion sums).
+inline void world_inertia(const Inertia& J, const SE3& f, Mat6& out) {
+  const double* R = f.R.data();  // column-major
+  const double* I = J.I.data();
+  const double* h = J.h.data();
+  const double m = J.m;
+  double g[3], Z[3][3];
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    const double r0 = R[r], r1 = R[r + 3], r2 = R[r + 6];
+    g[r] = r0 * h[0] + r1 * h[1] + r2 * h[2];
+    for (int c = 0; c < 3; ++c) Z[r][c] = r0 * I[3 * c] + r1 * I[3 * c + 1] + r2 * I[3 * c + 2];
+  }
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  const double d = 2.0 * (px * g[0] + py * g[1] + pz * g[2]) + m * (px * px + py * py + pz * pz);
+  const double w[3] = {g[0] + 0.5 * m * px, g[1] + 0.5 * m * py, g[2] + 0.5 * m * pz};
+  const double pv[3] = {px, py, pz};
+  double* o = out.data();  // o[r + 6 c]
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+#pragma GCC unroll 3
+    for (int c = r; c < 3; ++c) {
+      double x =
+          Z[r][0] * R[c] + Z[r][1] * R[c + 3] + Z[r][2] * R[c + 6] - (w[r] * pv[c] + pv[r] * w[c]);
+      if (r == c) x += d;
+      o[r + 6 * c] = x;
+      o[c + 6 * r] = x;
+    }
+  }
+  const double hx = g[0] + m * px, hy = g[1] + m * py, hz = g[2] + m * pz;
+  o[0 + 18] = 0, o[0 + 24] = -hz, o[0 + 30] = hy;
+  o[1 + 18] = hz, o[1 + 24] = 0, o[1 + 30] = -hx;
+  o[2 + 18] = -hy, o[2 + 24] = hx, o[2 + 30] = 0;
+  o[3 + 0] = 0, o[4 + 0] = -hz, o[5 + 0] = hy;  // the transpose of the block above
+  o[3 + 6] = hz, o[4 + 6] = 0, o[5 + 6] = -hx;
+  o[3 + 12] = -hy, o[4 + 12] = hx, o[5 + 12] = 0;
+  o[3 + 18] = m, o[4 + 18] = 0, o[5 + 18] = 0;
+  o[3 + 24] = 0, o[4 + 24] = m, o[5 + 24] = 0;
+  o[3 + 30] = 0, o[4 + 30] = 0, o[5 + 30] = m;
+}
+
+}  // namespace
 
 const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q) {
   if (!data.minv_reserved()) data.reserve_minv(model);
@@ -25,7 +72,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
   const int v1 = model.nv_base() - 1;
   forward_kinematics(model, data, base, q);
   for (int i = model.floating ? 0 : 1; i <= model.n; ++i) {
-    model.inertia[i].transformed(data.oMb[i]).to_matrix(data.IA[i]);
+    world_inertia(model.inertia[i], data.oMb[i], data.IA[i]);
   }
   auto& F = data.Fm;
   F.setZero();
@@ -36,9 +83,9 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     Vec6& S = data.S[row];
     detail::with_joint(jm, [&](auto J) { J.world_axis(data.oMb[i], S.data()); });
     const Mat6& IA = data.IA[i];
-    const Vec6 U = IA * S;               // (61) up to Omega^-1
+    Vec6& U = data.U[row];
+    U.noalias() = IA * S;                // (61) up to Omega^-1
     const double Dinv = 1.0 / S.dot(U);  // (60)
-    data.U[row] = U;
     data.Dinv[row] = Dinv;
     const int len = model.subtree_end[i] - i + 1;
     // Row i of D^-1 (upper triangle) is kept as column i (contiguous in column-major storage).
@@ -163,8 +210,12 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
       const double* p3 = Pp.row(3).data();
       const double* p4 = Pp.row(4).data();
       const double* p5 = Pp.row(5).data();
+      // Column `row` of P_i is read by nobody (the descendants read columns past their own
+      // rows), so the first column only finishes row i (r[row] is the diagonal entry itself).
+      r[row] -=
+          w0 * p0[row] + w1 * p1[row] + w2 * p2[row] + w3 * p3[row] + w4 * p4[row] + w5 * p5[row];
 #pragma GCC ivdep
-      for (int j = row; j < nv; ++j) {
+      for (int j = row + 1; j < nv; ++j) {
         const double a0 = p0[j], a1 = p1[j], a2 = p2[j], a3 = p3[j], a4 = p4[j], a5 = p5[j];
         const double x =
             r[j] - (w0 * a0 + w1 * a1 + w2 * a2 + w3 * a3 + w4 * a4 + w5 * a5);  // (58)
@@ -179,7 +230,7 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
       }
     } else {
 #pragma GCC ivdep
-      for (int j = row; j < nv; ++j) {
+      for (int j = row + 1; j < nv; ++j) {
         const double x = r[j];
         mrow[static_cast<std::ptrdiff_t>(j) * nv] = x;
         q0[j] = s0 * x;
