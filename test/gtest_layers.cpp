@@ -29,6 +29,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/geometry.h", "geometry"},
     {"se3_sim/dynamics.h", "dynamics"},
     {"se3_sim/constraints.h", "dynamics"},
+    {"se3_sim/collision.h", "collision"},
     {"se3_sim/integrate.h", "integrate"},
     {"se3_sim/render.h", "render"},
     {"se3_sim/render/camera.h", "render"},
@@ -36,6 +37,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/teleop.h", "teleop"},
     {"se3_sim/sim.h", "sim"},
     {"se3_sim/controllers.h", "sim"},
+    {"se3_sim/scene_objects.h", "sim"},
     {"se3_sim/ros/convert.h", "ros"},
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},
@@ -49,12 +51,14 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"model", {"lie", "model"}},
     {"geometry", {"lie", "model", "geometry"}},
     {"dynamics", {"lie", "model", "geometry", "dynamics"}},
-    {"integrate", {"lie", "model", "geometry", "dynamics", "integrate"}},
+    {"collision", {"lie", "model", "geometry", "dynamics", "collision"}},
+    {"integrate", {"lie", "model", "geometry", "dynamics", "collision", "integrate"}},
     {"render", {"lie", "model", "geometry", "dynamics", "render"}},
     {"teleop", {"lie", "model", "teleop"}},
-    {"sim", {"lie", "model", "geometry", "dynamics", "integrate", "sim"}},
+    {"sim", {"lie", "model", "geometry", "dynamics", "collision", "integrate", "sim"}},
     {"ros",
-     {"lie", "model", "geometry", "dynamics", "integrate", "sim", "render", "teleop", "ros"}},
+     {"lie", "model", "geometry", "dynamics", "collision", "integrate", "sim", "render", "teleop",
+      "ros"}},
 };
 
 // The files of a layer: its public headers and src/<layer>/.
