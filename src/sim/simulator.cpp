@@ -130,6 +130,7 @@ void Simulator::reset() {
   refresh_reference();
   W_ = W_checked_ = 0;
   passive_power_ = passive_power();
+  reset_objects();
 }
 
 void Simulator::refresh_reference() {
@@ -280,17 +281,165 @@ const VecX& Simulator::step_forces() {
   return forces_;
 }
 
-void Simulator::set_constraints(const ConstraintSpec& spec) {
+void Simulator::set_objects(const std::vector<SceneObject>& objects) {
+  std::vector<ObjectBody> bodies;
+  for (size_t j = 0; j < objects.size(); ++j) {
+    const SceneObject& o = objects[j];
+    if (!o.pose.p.allFinite() || !is_rotation(o.pose.R) || !o.twist.allFinite()) {
+      throw std::invalid_argument("object '" + o.name + "': pose or twist is not finite");
+    }
+    if (o.is_static) continue;
+    if (!(o.mass > 0) || !std::isfinite(o.mass) || !(o.inertia.m > 0)) {
+      throw std::invalid_argument("object '" + o.name + "': a free object needs a mass > 0");
+    }
+    ObjectBody b;
+    b.index = static_cast<int>(j);
+    b.model = std::make_unique<Model>();
+    b.model->floating = true;
+    b.model->start_with_base(o.name, o.inertia);
+    b.model->gravity = model_->gravity;
+    b.model->finalize();
+    b.model->validate();
+    b.stepper = make_stepper(kContactStepper, *b.model, config_.stepper);
+    b.initial = State(*b.model);
+    b.initial.base = o.pose;
+    b.initial.v = o.twist;
+    bodies.push_back(std::move(b));
+  }
+  object_specs_ = objects;
+  bodies_ = std::move(bodies);
+  body_models_.clear();
+  body_states_.clear();
+  body_a_.clear();
+  object_colliders_.clear();
+  for (const ObjectBody& b : bodies_) {
+    body_models_.push_back(b.model.get());
+    body_states_.push_back(b.initial);
+    body_a_.push_back(VecX::Zero(6));
+    const SceneObject& o = object_specs_[b.index];
+    CollisionObject c;
+    c.name = o.name;
+    c.frame = model_->n + 1 + static_cast<int>(body_models_.size()) - 1;
+    c.shape = o.shape;
+    c.group = 1;
+    c.mu = o.mu;
+    c.restitution = o.restitution;
+    object_colliders_.push_back(c);
+  }
+  CollisionObject ground;
+  ground.name = "ground";
+  ground.halfspace = true;
+  ground.mu = spec_.mu;
+  ground.restitution = spec_.options.restitution;
+  object_colliders_.push_back(ground);
+  object_contacts_.clear();
+  object_contacts_.reserve(16 * bodies_.size());
+  body_last_good_ = body_states_;
+  rebuild_constraints();
+  reset();
+}
+
+void Simulator::reset_objects() {
+  objects_.resize(object_specs_.size());
+  for (size_t j = 0; j < object_specs_.size(); ++j) {
+    ObjectState& s = objects_[j];
+    s.name = object_specs_[j].name;
+    s.is_static = object_specs_[j].is_static;
+    s.pose = object_specs_[j].pose;
+    s.twist = s.is_static ? Vec6::Zero() : object_specs_[j].twist;
+  }
+  for (size_t j = 0; j < bodies_.size(); ++j) {
+    body_states_[j] = bodies_[j].initial;
+    body_last_good_[j] = bodies_[j].initial;
+  }
+  penetration_ = penetration_max_ = 0;
+}
+
+double Simulator::object_ground_contacts() {
+  object_contacts_.clear();
+  double deepest = 0;
+  if (!spec_.ground) return 0;
+  const Vec3 n = spec_.ground_normal.normalized();
+  const double off = spec_.ground_offset;
+  const double margin = spec_.options.margin;
+  const int ground = static_cast<int>(object_colliders_.size()) - 1;
+  auto add = [&](int j, const Vec3& p) {
+    const double g = n.dot(p) - off;
+    deepest = std::max(deepest, -g);
+    if (g >= margin + 0.5) return;  // far: no row (the reach test is the solver's margin)
+    if (object_contacts_.size() == object_contacts_.capacity()) return;  // no allocation
+    Contact c;
+    c.a = ground;
+    c.b = j;
+    c.point = p;
+    c.normal = n;
+    c.depth = -g;
+    object_contacts_.push_back(c);
+  };
+  for (size_t j = 0; j < bodies_.size(); ++j) {
+    const SceneObject& o = object_specs_[bodies_[j].index];
+    const SE3& f = body_states_[j].base;
+    const int jj = static_cast<int>(j);
+    const Shape& sh = o.shape;
+    const Vec3 nb = f.R.transpose() * n;  // the normal in the object's frame
+    switch (sh.type) {
+      case ShapeType::Sphere:
+        add(jj, f.p - sh.radius * n);
+        break;
+      case ShapeType::Capsule:
+        for (int e = -1; e <= 1; e += 2) {
+          add(jj, f.act(Vec3(0, 0, 0.5 * e * sh.length)) - sh.radius * n);
+        }
+        break;
+      case ShapeType::Box:
+        for (int c = 0; c < 8; ++c) {
+          add(jj, f.act(0.5 * Vec3((c & 1) ? sh.box.x() : -sh.box.x(),
+                                   (c & 2) ? sh.box.y() : -sh.box.y(),
+                                   (c & 4) ? sh.box.z() : -sh.box.z())));
+        }
+        break;
+      case ShapeType::Cylinder:
+        for (int e = -1; e <= 1; e += 2) {
+          // The rim point lowest along n, and three more around the rim.
+          Vec3 radial(nb.x(), nb.y(), 0);
+          const double len = radial.norm();
+          const double t0 = len > 1e-9 ? std::atan2(-radial.y(), -radial.x()) : 0.0;
+          for (int k = 0; k < 4; ++k) {
+            const double t = t0 + k * M_PI / 2;
+            add(jj,
+                f.act(Vec3(sh.radius * std::cos(t), sh.radius * std::sin(t), 0.5 * e * sh.length)));
+          }
+        }
+        break;
+      case ShapeType::Mesh:  // meshes touch through the collision layer
+        break;
+    }
+  }
+  return deepest;
+}
+
+void Simulator::rebuild_constraints() {
   constraints_.reset();
   constraints_start_.reset();
-  if (!spec.empty()) {
-    constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
-    constraints_->anchor(initial_);
-    State x = initial_;
-    constraints_->project(x);
-    initial_ = x;
-    constraints_start_ = std::make_unique<ConstraintSystem>(*constraints_);
+  if (spec_.empty() && bodies_.empty()) return;
+  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec_);
+  if (!bodies_.empty()) {
+    constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }
+  constraints_->anchor(initial_);
+  State x = initial_;
+  constraints_->project(x);
+  initial_ = x;
+  constraints_start_ = std::make_unique<ConstraintSystem>(*constraints_);
+}
+
+void Simulator::set_constraints(const ConstraintSpec& spec) {
+  spec_ = spec;
+  if (!object_colliders_.empty()) {
+    object_colliders_.back().mu = spec_.mu;
+    object_colliders_.back().restitution = spec_.options.restitution;
+  }
+  rebuild_constraints();
   reset();
 }
 
@@ -365,9 +514,25 @@ bool Simulator::step() {
   const VecX& tau = step_forces();
   const int nv = model_->nv;
   const double P0 = dot(nv, tau.data(), state_.v.data()) + passive_power_;  // at the start
-  const StepInfo info = constraints_
-                            ? constrained_step(*constraints_, *stepper_, state_, tau, config_.dt)
-                            : stepper_->step(state_, tau, config_.dt);
+  StepInfo info;
+  if (constraints_) {
+    ContactBodies cb;
+    if (!bodies_.empty()) {
+      for (size_t j = 0; j < bodies_.size(); ++j) {
+        const State& s = body_states_[j];
+        body_a_[j] = bodies_[j].stepper->acceleration(s.base, s.q, s.v, body_zero_);
+      }
+      object_ground_contacts();
+      cb.models = &body_models_;
+      cb.states = &body_states_;
+      cb.a_free = &body_a_;
+      cb.contacts = &object_contacts_;
+      cb.objects = &object_colliders_;
+    }
+    info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
+  } else {
+    info = stepper_->step(state_, tau, config_.dt);
+  }
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;
@@ -375,6 +540,19 @@ bool Simulator::step() {
   if (!(info.ok && rates_ok() && (!energy_step || energy_ok()))) {
     roll_back(info);
     return false;
+  }
+  if (constraints_) {
+    penetration_ = constraints_->report().penetration;
+    if (!bodies_.empty()) {
+      penetration_ = std::max(penetration_, object_ground_contacts());
+      for (size_t j = 0; j < bodies_.size(); ++j) {
+        ObjectState& o = objects_[bodies_[j].index];
+        o.pose = body_states_[j].base;
+        o.twist = body_states_[j].v;
+        save(body_states_[j], body_last_good_[j]);
+      }
+    }
+    penetration_max_ = std::max(penetration_max_, penetration_);
   }
   ++steps_;
   time_ += config_.dt;
@@ -413,6 +591,7 @@ void Simulator::roll_back(const StepInfo& info) {
           std::to_string(config_.guard.energy_growth) + " x the reference " +
           std::to_string(E_ref_) + " J";
   }
+  for (size_t j = 0; j < bodies_.size(); ++j) body_states_[j] = body_last_good_[j];
   const State& back = to_checked ? last_checked_ : last_good_;
   state_.base = back.base;
   state_.q = back.q;
@@ -489,9 +668,8 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
-  if (!scene.constraints.empty()) {
-    sim->set_constraints(scene_constraints(scene, sim->model(), urdf_xml));
-  }
+  const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
+  if (!spec.empty()) sim->set_constraints(spec);
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }
