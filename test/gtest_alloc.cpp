@@ -304,3 +304,47 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// Constraint and contact steps (constraints.h through integrate.h's constrained_step) allocate
+// nothing after the first, counting malloc as well as operator new: the four-bar loop (rkmk4
+// with eq. (32) in every stage, projection), the pinned chain, Solo12 on the ground (the
+// velocity level, PGS and the active-set solver), and free objects on the ground in a
+// Simulator (rows from outside contacts, free bodies). Collision detection is not in these
+// steps (the ground contacts are the sim layer's own).
+TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
+  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  for (const char* name : {"fourbar", "pinned_chain", "quadruped_ground"}) {
+    for (ContactSolver solver : {ContactSolver::PGS, ContactSolver::ActiveSet}) {
+      SCOPED_TRACE(std::string(name) + (solver == ContactSolver::PGS ? " pgs" : " active_set"));
+      Scene sc = load_scene(scenes + name + ".yaml");
+      sc.constraints.options.solver = solver;
+      const Model m = scene_model(sc);
+      ConstraintSystem cs(m, scene_constraints(sc, m));
+      State x = scene_state(sc, m);
+      cs.anchor(x);
+      auto stepper = make_stepper(sc.integrator, m);
+      const VecX tau = VecX::Zero(m.nv);
+      for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt).ok);
+      EXPECT_EQ(allocations_of([&] {
+                  for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt);
+                }),
+                0);
+    }
+  }
+  Scene sc = parse_scene("robot: chain:2\nbase: fixed\ndt: 0.001\nground: {mu: 0.5}\n", scenes);
+  auto sim = make_simulator(sc);
+  std::vector<SceneObject> objs(3);
+  for (int j = 0; j < 3; ++j) {
+    objs[j].name = "o" + std::to_string(j);
+    objs[j].shape = j == 0 ? make_box(Vec3(0.1, 0.2, 0.3)) : make_sphere(0.05);
+    objs[j].is_static = false;
+    objs[j].mass = 1;
+    objs[j].inertia = Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity());
+    objs[j].pose.p = Vec3(j, 0, 0.2);
+  }
+  sim->set_objects(objs);
+  ASSERT_EQ(sim->step_n(10), 10) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(300), 300) << sim->failure(); }), 0);
+  EXPECT_LT(sim->objects()[0].pose.p.z(), 0.2);  // fell onto the ground and rests there
+  EXPECT_GT(sim->objects()[0].pose.p.z(), 0.14);
+}
