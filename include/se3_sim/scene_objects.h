@@ -28,4 +28,8 @@ struct SceneObject {
   int line = 0;       ///< line in the scene file (for errors)
 };
 
+/// Rotational inertia about the centre of a uniform solid `shape` of `mass`: box, sphere,
+/// cylinder and capsule (axis z) exactly; a mesh as its scaled axis-aligned bounding box.
+Mat3 uniform_density_inertia(const Shape& shape, double mass);
+
 }  // namespace se3

@@ -45,6 +45,10 @@ struct SceneError : std::runtime_error {
 ///       src/sim/contact_scene.cpp (read into Scene::constraints)
 ///   controllers: {NAME: {type: effort_controllers/..., joints: [...], pid: {...}}, ...}
 ///       ros_control-style controllers (controllers.h), every one listed runs at every step
+///   objects: [{name, shape, mass, inertia, pose, twist, mu, restitution, color}, ...]
+///       rigid bodies beside the robot (scene_objects.h); a scene may have objects and no robot
+///   srdf: robot.srdf                self_collision: false
+///   contact: {margin: 0.01, max_contacts_per_pair: 4}    (the collision layer's options)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -78,6 +82,12 @@ struct Scene {
   std::vector<double> chain_masses = {1.0};
   ConstraintSpec constraints;  ///< bilateral constraints, limits, ground contact (empty: none)
   std::vector<ControllerSpec> controllers;  ///< run inside the simulator (empty: none)
+  /// `objects:` (scene_objects.h, src/sim/scene_objects.cpp), in file order.
+  std::vector<SceneObject> objects;
+  std::string srdf;               ///< `srdf:` resolved against the scene's folder ("": none)
+  bool self_collision = false;    ///< `self_collision:` robot links against each other
+  double contact_margin = 0.01;   ///< `contact: {margin}` m: gaps reported as contacts
+  int max_contacts_per_pair = 4;  ///< `contact: {max_contacts_per_pair}`
 };
 
 /// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.

@@ -1,0 +1,219 @@
+// The scene's `objects:`, `srdf:`, `self_collision:` and `contact:` keys
+// (src/sim/scene_objects.cpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "se3_sim/sim.h"
+
+using namespace se3;
+
+namespace {
+
+const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kData = kRoot + "/data";
+
+// The SceneError message of parsing text (with base_dir data/), or "" when it parses.
+std::string error_of(const std::string& text) {
+  try {
+    parse_scene(text, kData, "s.yaml");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(SceneObjects, BlockListOfEveryShape) {
+  const std::string text =
+      "# objects only, no robot\n"
+      "objects:\n"
+      "  - name: crate\n"
+      "    shape: {box: [0.2, 0.4, 0.6]}\n"
+      "    mass: 2.0\n"
+      "    pose: {position: [1, 2, 3], orientation: [0, 0, 0.7071067811865476, "
+      "0.7071067811865476]}\n"
+      "    twist: [0, 0, 1, 0.5, 0, 0]\n"
+      "    mu: 0.4\n"
+      "    restitution: 0.5\n"
+      "    color: [1, 0, 0]\n"
+      "  - name: ball\n"
+      "    shape: {sphere: 0.1}\n"
+      "    mass: 1\n"
+      "  - name: can\n"
+      "    shape: {cylinder: [0.05, 0.2]}\n"
+      "    mass: 0.5\n"
+      "    inertia: [0.01, 0.02, 0.03]\n"
+      "  - name: pill\n"
+      "    shape: {capsule: [0.05, 0.1]}\n"
+      "    mass: 0.3\n"
+      "    inertia: [[0.01, 0, 0], [0, 0.01, 0], [0, 0, 0.005]]\n"
+      "  - name: table\n"
+      "    shape: {box: [1, 1, 0.05]}\n"
+      "    color: [0.5, 0.4, 0.3, 0.8]\n"
+      "  - name: foot\n"
+      "    shape: {mesh: meshes/example-robot-data/robots/solo_description/meshes/stl/with_foot/"
+      "solo_foot.stl, scale: [2, 2, 2]}\n"
+      "    mass: 0.1\n"
+      "self_collision: true\n"
+      "contact: {margin: 0.02, max_contacts_per_pair: 8}\n"
+      "srdf: meshes/example-robot-data/robots/panda_description/srdf/panda.srdf\n";
+  const Scene s = parse_scene(text, kData, "s.yaml");
+  EXPECT_TRUE(s.robot.empty());
+  ASSERT_EQ(s.objects.size(), 6u);
+  const SceneObject& crate = s.objects[0];
+  EXPECT_EQ(crate.name, "crate");
+  EXPECT_EQ(crate.shape.type, ShapeType::Box);
+  EXPECT_TRUE(crate.shape.box.isApprox(Vec3(0.2, 0.4, 0.6)));
+  EXPECT_FALSE(crate.is_static);
+  EXPECT_DOUBLE_EQ(crate.mass, 2.0);
+  EXPECT_DOUBLE_EQ(crate.inertia.m, 2.0);
+  EXPECT_TRUE(crate.inertia.h.isZero());
+  // Uniform box about its centre: m/12 (b^2 + c^2), ...
+  EXPECT_NEAR(crate.inertia.I(0, 0), 2.0 / 12 * (0.16 + 0.36), 1e-12);
+  EXPECT_NEAR(crate.inertia.I(1, 1), 2.0 / 12 * (0.04 + 0.36), 1e-12);
+  EXPECT_NEAR(crate.inertia.I(2, 2), 2.0 / 12 * (0.04 + 0.16), 1e-12);
+  EXPECT_TRUE(crate.pose.p.isApprox(Vec3(1, 2, 3)));
+  EXPECT_TRUE((crate.pose.R * Vec3::UnitX()).isApprox(Vec3::UnitY(), 1e-9));
+  EXPECT_DOUBLE_EQ(crate.twist[2], 1);
+  EXPECT_DOUBLE_EQ(crate.twist[3], 0.5);
+  EXPECT_DOUBLE_EQ(crate.mu, 0.4);
+  EXPECT_DOUBLE_EQ(crate.restitution, 0.5);
+  EXPECT_TRUE(crate.material.has_color);
+  EXPECT_FLOAT_EQ(crate.material.rgba[0], 1.0f);
+  EXPECT_EQ(crate.line, 3);
+
+  EXPECT_EQ(s.objects[1].shape.type, ShapeType::Sphere);
+  EXPECT_NEAR(s.objects[1].inertia.I(1, 1), 0.4 * 0.01, 1e-12);
+  EXPECT_DOUBLE_EQ(s.objects[1].mu, 0.8);  // default
+  EXPECT_EQ(s.objects[2].shape.type, ShapeType::Cylinder);
+  EXPECT_NEAR(s.objects[2].inertia.I(2, 2), 0.03, 1e-12);
+  EXPECT_EQ(s.objects[3].shape.type, ShapeType::Capsule);
+  EXPECT_NEAR(s.objects[3].inertia.I(2, 2), 0.005, 1e-12);
+  EXPECT_TRUE(s.objects[4].is_static);
+  EXPECT_FLOAT_EQ(s.objects[4].material.rgba[3], 0.8f);
+  const SceneObject& foot = s.objects[5];
+  ASSERT_EQ(foot.shape.type, ShapeType::Mesh);
+  ASSERT_TRUE(foot.shape.mesh);
+  EXPECT_GT(foot.shape.mesh->triangle_count(), 10u);
+  EXPECT_TRUE(foot.shape.scale.isApprox(Vec3(2, 2, 2)));
+  EXPECT_GT(foot.inertia.I(0, 0), 0);
+
+  EXPECT_TRUE(s.self_collision);
+  EXPECT_DOUBLE_EQ(s.contact_margin, 0.02);
+  EXPECT_EQ(s.max_contacts_per_pair, 8);
+  EXPECT_NE(s.srdf.find("panda.srdf"), std::string::npos);
+  EXPECT_EQ(s.srdf[0], '/');  // resolved against the scene's folder
+}
+
+TEST(SceneObjects, DefaultsWithoutTheKeys) {
+  const Scene s = parse_scene("robot: chain:2\n", kData, "s.yaml");
+  EXPECT_TRUE(s.objects.empty());
+  EXPECT_FALSE(s.self_collision);
+  EXPECT_TRUE(s.srdf.empty());
+  EXPECT_DOUBLE_EQ(s.contact_margin, 0.01);
+  // A flow list parses as well, and an empty objects key is no objects.
+  EXPECT_EQ(parse_scene("objects: [{name: a, shape: {sphere: 1}}]\n", kData, "s").objects.size(),
+            1u);
+  EXPECT_TRUE(parse_scene("objects:\n", kData, "s").objects.empty());
+}
+
+TEST(SceneObjects, UniformDensityInertiaOfCylinderAndCapsule) {
+  // Cylinder axis z: Izz = m r^2 / 2, Ixx = m (3 r^2 + l^2) / 12.
+  const Mat3 Ic = uniform_density_inertia(make_cylinder(0.1, 0.4), 3.0);
+  EXPECT_NEAR(Ic(2, 2), 3.0 * 0.01 / 2, 1e-12);
+  EXPECT_NEAR(Ic(0, 0), 3.0 * (0.03 + 0.16) / 12, 1e-12);
+  // A capsule of zero length is a sphere; a very long thin one is a rod (m l^2 / 12).
+  const Mat3 Is = uniform_density_inertia(make_capsule(0.1, 1e-12), 2.0);
+  EXPECT_NEAR(Is(0, 0), 0.4 * 2.0 * 0.01, 1e-12);
+  EXPECT_NEAR(Is(2, 2), 0.4 * 2.0 * 0.01, 1e-12);
+  const Mat3 Ir = uniform_density_inertia(make_capsule(1e-4, 1.0), 1.0);
+  EXPECT_NEAR(Ir(0, 0), 1.0 / 12, 1e-4);
+  // Capsule by numeric integration of the solid (points of a grid inside it).
+  const double r = 0.1, l = 0.3;
+  const int n = 120;
+  double ixx = 0, izz = 0, count = 0;
+  const double zmax = l / 2 + r;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (int k = 0; k < 2 * n; ++k) {
+        const double x = -r + (i + 0.5) * 2 * r / n, y = -r + (j + 0.5) * 2 * r / n;
+        const double z = -zmax + (k + 0.5) * 2 * zmax / (2 * n);
+        const double dz = std::max(0.0, std::abs(z) - l / 2);
+        if (x * x + y * y + dz * dz > r * r) continue;
+        ixx += y * y + z * z;
+        izz += x * x + y * y;
+        ++count;
+      }
+    }
+  }
+  const Mat3 Ik = uniform_density_inertia(make_capsule(r, l), 1.0);
+  EXPECT_NEAR(Ik(0, 0), ixx / count, 2e-3 * Ik(0, 0));
+  EXPECT_NEAR(Ik(2, 2), izz / count, 2e-3 * Ik(2, 2));
+}
+
+TEST(SceneObjects, BadInputIsOneLineNamingLineAndKey) {
+  struct Case {
+    const char* text;
+    const char* expect;  // part of the message
+  };
+  const Case cases[] = {
+      {"objects:\n  - name: a\n    shape: {cone: 1}\n",
+       "s.yaml:3: unknown key 'cone' in objects[0].shape"},
+      {"objects:\n  - name: a\n    shape: {}\n", "s.yaml:3: 'objects[0].shape' needs one of box"},
+      {"objects:\n  - name: a\n    shape: {box: [1, 0, 1]}\n",
+       "s.yaml:3: 'objects[0].shape.box' needs three positive"},
+      {"objects:\n  - name: a\n    shape: {box: [1, -1, 1]}\n", "positive extents"},
+      {"objects:\n  - name: a\n    shape: {sphere: -1}\n",
+       "s.yaml:3: 'objects[0].shape.sphere' needs a positive radius"},
+      {"objects:\n  - name: a\n    shape: {sphere: 0}\n", "positive radius"},
+      {"objects:\n  - name: a\n    shape: {cylinder: [0.1, 0]}\n", "positive length"},
+      {"objects:\n  - name: a\n    shape: {capsule: [-0.1, 1]}\n", "positive radius"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1, box: [1, 1, 1]}\n", "has two shapes"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1, scale: [1, 1, 1]}\n", "for meshes only"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    mass: -2\n",
+       "s.yaml:4: 'objects[0].mass' must be positive"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    mass: 0\n",
+       "'objects[0].mass' must be positive"},
+      {"objects:\n  - name: a\n    shape: {mesh: nothere.stl}\n",
+       "s.yaml:3: 'objects[0].shape.mesh'"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n  - name: a\n    shape: {sphere: 2}\n",
+       "s.yaml:4: 'objects[1]': duplicate object name 'a'"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    pose: {orientation: [0, 0, 0, 2]}\n",
+       "s.yaml:4: 'objects[0].pose.orientation' (x, y, z, w) is not a unit quaternion"},
+      {"objects:\n  - shape: {sphere: 1}\n", "s.yaml:2: 'objects[0]' needs a name"},
+      {"objects:\n  - name: a\n", "s.yaml:2: 'objects[0]' (a) needs a shape"},
+      {"objects:\n  - name: a b\n    shape: {sphere: 1}\n", "not a TF frame name"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    colour: [1, 0, 0]\n",
+       "s.yaml:4: unknown key 'colour'"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    color: [2, 0, 0]\n", "values in [0, 1]"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    restitution: 1.5\n",
+       "objects[0].restitution"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    mu: -1\n", "objects[0].mu"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    inertia: [1, 1, 1]\n", "needs a mass"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    twist: [0, 0, 1, 0, 0, 0]\n",
+       "needs a mass"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    mass: 1\n    inertia: [1, 1, 3]\n",
+       "s.yaml:5: 'objects[0].inertia' is not a physical inertia"},
+      {"objects:\n  - name: a\n    shape: {sphere: 1}\n    mass: 1\n    inertia: [[1, 0.5, 0], [0, "
+       "1, 0], [0, 0, 1]]\n",
+       "is not symmetric"},
+      {"objects: {name: a}\n", "s.yaml:1: 'objects' needs a list"},
+      {"srdf: nothere.srdf\n", "s.yaml:1: 'srdf' file"},
+      {"self_collision: maybe\n", "s.yaml:1:"},
+      {"contact: {margin: -1}\n", "s.yaml:1: 'contact.margin'"},
+      {"contact: {gap: 1}\n", "unknown key 'gap'"},
+  };
+  for (const Case& c : cases) {
+    const std::string e = error_of(c.text);
+    EXPECT_NE(e.find(c.expect), std::string::npos) << c.text << "\n  gave: '" << e << "'";
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  }
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
