@@ -331,20 +331,51 @@ TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
                 0);
     }
   }
-  Scene sc = parse_scene("robot: chain:2\nbase: fixed\ndt: 0.001\nground: {mu: 0.5}\n", scenes);
-  auto sim = make_simulator(sc);
-  std::vector<SceneObject> objs(3);
-  for (int j = 0; j < 3; ++j) {
-    objs[j].name = "o" + std::to_string(j);
-    objs[j].shape = j == 0 ? make_box(Vec3(0.1, 0.2, 0.3)) : make_sphere(0.05);
-    objs[j].is_static = false;
-    objs[j].mass = 1;
-    objs[j].inertia = Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity());
-    objs[j].pose.p = Vec3(j, 0, 0.2);
+  // Free bodies with contacts from outside (the collision layer's list; collide() itself, FCL's,
+  // is not counted here): a robot on the ground plus two boxes, one resting on the ground at its
+  // four corners, one on it.
+  const Scene sc = load_scene(scenes + "quadruped_ground.yaml");
+  const Model m = scene_model(sc);
+  ConstraintSystem cs(m, scene_constraints(sc, m));
+  std::vector<Model> boxes(2);
+  std::vector<const Model*> models;
+  for (Model& b : boxes) {
+    b.floating = true;
+    b.start_with_base("box", Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity()));
+    b.finalize();
+    models.push_back(&b);
   }
-  sim->set_objects(objs);
-  ASSERT_EQ(sim->step_n(10), 10) << sim->failure();
-  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(300), 300) << sim->failure(); }), 0);
-  EXPECT_LT(sim->objects()[0].pose.p.z(), 0.2);  // fell onto the ground and rests there
-  EXPECT_GT(sim->objects()[0].pose.p.z(), 0.14);
+  cs.set_free_bodies(models, 16);
+  std::vector<State> states = {State(boxes[0]), State(boxes[1])};
+  states[0].base.p = Vec3(2, 0, 0.1);
+  states[1].base.p = Vec3(2, 0, 0.3);
+  std::vector<VecX> a_free(2, VecX::Zero(6));
+  for (VecX& a : a_free) a[5] = -9.81;
+  std::vector<CollisionObject> objects(3);
+  objects[0].frame = m.n + 1;
+  objects[1].frame = m.n + 2;
+  objects[2].frame = CollisionObject::kWorld;  // the ground
+  std::vector<Contact> contacts;
+  for (int k = 0; k < 8; ++k) {
+    Contact c;
+    c.a = k < 4 ? 2 : 0;
+    c.b = k < 4 ? 0 : 1;
+    c.point = Vec3(2 + ((k & 1) ? 0.1 : -0.1), (k & 2) ? 0.1 : -0.1, k < 4 ? 0.0 : 0.2);
+    contacts.push_back(c);
+  }
+  ContactBodies cb;
+  cb.models = &models;
+  cb.states = &states;
+  cb.a_free = &a_free;
+  cb.contacts = &contacts;
+  cb.objects = &objects;
+  State x = scene_state(sc, m);
+  auto stepper = make_stepper(sc.integrator, m);
+  const VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt, cb).ok);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt, cb);
+            }),
+            0);
+  EXPECT_LT(states[1].v.norm(), 1e-3);  // the contacts held the boxes
 }

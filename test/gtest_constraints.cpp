@@ -17,7 +17,6 @@
 
 using namespace se3;
 
-
 namespace {
 
 #ifdef SE3_SIM_SOURCE_DIR

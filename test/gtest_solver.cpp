@@ -154,7 +154,7 @@ TEST(Solver, BoxRestingCarriesItsWeightSharedByTheCorners) {
     if (which == ContactSolver::ActiveSet) {  // the minimum-norm share: a quarter each
       for (int r = 0; r < s.rows.count; ++r) {
         if (s.rows.type[r] == RowType::ContactNormal) {
-          EXPECT_NEAR(s.p[r], kMass * kG * kH / 4, 1e-9 * kMass * kG * kH);
+          EXPECT_NEAR(s.p[r], kMass * kG * kH / 4, 1e-7 * kMass * kG * kH);
         }
       }
     }
@@ -209,12 +209,17 @@ TEST(Solver, StackOfThreeIsSoftUnderFewPgsSweepsAndExactUnderTheActiveSet) {
   const double gh = kG * kH;
   // Exact: every box at rest, the interfaces carry 3, 2 and 1 weights.
   EXPECT_LT(as.velocity().cwiseAbs().maxCoeff(), 1e-9 * gh);
-  EXPECT_NEAR(as.normal_sum(0, 4), 3 * kMass * gh, 1e-9 * kMass * gh);
-  EXPECT_NEAR(as.normal_sum(4, 4), 2 * kMass * gh, 1e-9 * kMass * gh);
-  EXPECT_NEAR(as.normal_sum(8, 4), kMass * gh, 1e-9 * kMass * gh);
+  EXPECT_NEAR(as.normal_sum(0, 4), 3 * kMass * gh, 1e-8 * kMass * gh);
+  EXPECT_NEAR(as.normal_sum(4, 4), 2 * kMass * gh, 1e-8 * kMass * gh);
+  EXPECT_NEAR(as.normal_sum(8, 4), kMass * gh, 1e-8 * kMass * gh);
   // PGS after 5 sweeps: the boxes still sink at a good fraction of g h.
   const double sink = pgs.velocity().cwiseAbs().maxCoeff();
   std::printf("stack of 3, 5 sweeps: PGS leaves %.3g g h, the active set %.3g g h\n", sink / gh,
               as.velocity().cwiseAbs().maxCoeff() / gh);
   EXPECT_GT(sink, 0.01 * gh);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
 }

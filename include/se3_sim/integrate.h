@@ -194,12 +194,22 @@ bool is_contact_scheme(const std::string& name);
 /// f <- f exp(h V0) (kept orthonormal), q <- q + h qdot.
 void advance_positions_semi_implicit(const Model& model, State& x, double h);
 
+/// A free body of a contact step (a scene object: Model n = 0, floating, its frame at its centre
+/// of mass). Its free velocity over h is taken in the frame of the step's start, where without
+/// torque the body-frame momentum does not change: V* = V + h [0; R^T g] (a = [0; R^T g]).
+void free_body_acceleration(const Model& body, const State& x, VecX& a);
+/// After the impulses: R <- R E, E = exp(h w), p <- p + h R v, and the twist re-expressed in the
+/// new frame (v <- E^T v, w <- I^-1 E^T I w), so that in flight the world momentum m R v and
+/// angular momentum R I w stay exactly what they were (free objects keep their momentum
+/// between impacts; the body-frame semi-implicit Euler step would not).
+void advance_free_body(const Model& body, State& x, double h);
+
 /// The free bodies of a contact step beside the robot (scene objects) and contacts from
 /// outside; any pointer may be null (no bodies, no outside contacts).
 struct ContactBodies {
   const std::vector<const Model*>* models = nullptr;  ///< single free bodies (n = 0)
   std::vector<State>* states = nullptr;
-  const std::vector<VecX>* a_free = nullptr;  ///< their free accelerations this step
+  const std::vector<VecX>* a_free = nullptr;  ///< free_body_acceleration of each, this step
   const std::vector<Contact>* contacts = nullptr;
   const std::vector<CollisionObject>* objects = nullptr;
 };

@@ -335,15 +335,14 @@ class Simulator {
   struct ObjectBody {
     int index = 0;  ///< into object_specs_ / objects_
     std::unique_ptr<Model> model;
-    std::unique_ptr<Stepper> stepper;  ///< its free acceleration (ABA of one body)
     State initial;
   };
   void reset_objects();
   /// The constraint system the step needs (the scene's, or an empty one for free objects).
   void rebuild_constraints();
-  /// The objects' contacts with the ground plane of the constraints (until the collision layer
-  /// gives them), into object_contacts_; returns the deepest penetration (m, >= 0).
-  double object_ground_contacts();
+  /// The contacts of the objects' collision model at the current state (collision_data_);
+  /// returns the deepest penetration (m, >= 0).
+  double collide_objects();
 
   std::unique_ptr<Model> model_;
   SimConfig config_;
@@ -353,10 +352,13 @@ class Simulator {
   std::vector<const Model*> body_models_;
   std::vector<State> body_states_, body_last_good_;
   std::vector<VecX> body_a_;
-  VecX body_zero_ = VecX::Zero(6);  ///< no force commanded on an object
-  std::vector<Contact> object_contacts_;
-  std::vector<CollisionObject> object_colliders_;  ///< free objects, then the ground
-  ConstraintSpec spec_;                            ///< as set_constraints got it
+  /// The objects (free and static) and the ground as a collision model (the robot's own
+  /// geometry is not in it yet: the contact spheres of the constraints stand for it).
+  std::unique_ptr<CollisionModel> collision_;
+  CollisionData collision_data_;
+  std::vector<SE3> frame_poses_;  ///< frames 0..n the robot's bodies, n + 1 + j free object j
+  bool contacts_fresh_ = false;   ///< collision_data_ is at the current state
+  ConstraintSpec spec_;           ///< as set_constraints got it
   double penetration_ = 0, penetration_max_ = 0;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;

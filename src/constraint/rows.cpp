@@ -167,9 +167,9 @@ void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts
     rows.gap[n] = g;
     double ref = gap_reference(g, h, p);
     const double e = std::max(objects[c.a].restitution, objects[c.b].restitution);
-    if (e > 0 && g <= p.slop) {
+    if (e > 0) {  // an impact within this step bounces: its velocity reversed, times e
       const double vn = rows.J.row(n).dot(vfree);
-      if (vn < -p.restitution_velocity) ref = std::max(ref, -e * vn);
+      if (vn < -p.restitution_velocity && g + h * vn <= p.slop) ref = std::max(ref, -e * vn);
     }
     rows.b[n] = ref;
   }

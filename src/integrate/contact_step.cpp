@@ -18,6 +18,21 @@ void advance_positions_semi_implicit(const Model& model, State& x, double h) {
   for (int k = 0; k < model.nq; ++k) x.q[k] += h * x.v[nb + k];
 }
 
+void free_body_acceleration(const Model& body, const State& x, VecX& a) {
+  a.head<3>().setZero();
+  a.segment<3>(3) = x.base.R.transpose() * body.gravity;
+}
+
+void advance_free_body(const Model& body, State& x, double h) {
+  const Vec3 w = x.v.head<3>(), v = x.v.segment<3>(3);
+  const Mat3 E = exp_so3(h * w);
+  x.base.p += h * (x.base.R * v);
+  x.base.R = reorthonormalize(x.base.R * E);
+  const Mat3& I = body.inertia[0].I;
+  x.v.segment<3>(3) = E.transpose() * v;
+  x.v.head<3>() = I.ldlt().solve(E.transpose() * (I * w));
+}
+
 namespace detail {
 namespace {
 
@@ -85,7 +100,7 @@ StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State
     for (size_t j = 0; j < nbody; ++j) {
       State& s = (*bodies.states)[j];
       s.v.noalias() += h * (*bodies.a_free)[j];
-      advance_positions_semi_implicit(*(*bodies.models)[j], s, h);
+      advance_free_body(*(*bodies.models)[j], s, h);
     }
     return info;
   }
@@ -99,7 +114,7 @@ StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State
   }
   advance_positions_semi_implicit(stepper.model(), x, h);
   for (size_t j = 0; j < nbody; ++j) {
-    advance_positions_semi_implicit(*(*bodies.models)[j], (*bodies.states)[j], h);
+    advance_free_body(*(*bodies.models)[j], (*bodies.states)[j], h);
   }
   constraints.finish_velocity_step(x);
   return info;

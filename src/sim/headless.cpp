@@ -118,6 +118,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   Simulator sim(std::move(model), x0, cfg);
   const ConstraintSpec spec = scene_constraints(scene, sim.model());
   if (!spec.empty()) sim.set_constraints(spec);
+  if (!scene.objects.empty()) sim.set_objects(scene.objects);
   if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;

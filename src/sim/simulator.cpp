@@ -300,7 +300,6 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
     b.model->gravity = model_->gravity;
     b.model->finalize();
     b.model->validate();
-    b.stepper = make_stepper(kContactStepper, *b.model, config_.stepper);
     b.initial = State(*b.model);
     b.initial.base = o.pose;
     b.initial.v = o.twist;
@@ -311,29 +310,53 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   body_models_.clear();
   body_states_.clear();
   body_a_.clear();
-  object_colliders_.clear();
-  for (const ObjectBody& b : bodies_) {
-    body_models_.push_back(b.model.get());
-    body_states_.push_back(b.initial);
-    body_a_.push_back(VecX::Zero(6));
-    const SceneObject& o = object_specs_[b.index];
+  collision_.reset();
+  std::vector<CollisionObject> colliders;
+  for (size_t j = 0, free_index = 0; j < object_specs_.size(); ++j) {
+    const SceneObject& o = object_specs_[j];
     CollisionObject c;
     c.name = o.name;
-    c.frame = model_->n + 1 + static_cast<int>(body_models_.size()) - 1;
     c.shape = o.shape;
     c.group = 1;
     c.mu = o.mu;
     c.restitution = o.restitution;
-    object_colliders_.push_back(c);
+    if (o.is_static) {
+      c.frame = CollisionObject::kWorld;
+      c.placement = o.pose;
+    } else {
+      c.frame = model_->n + 1 + static_cast<int>(free_index++);
+    }
+    colliders.push_back(c);
   }
-  CollisionObject ground;
-  ground.name = "ground";
-  ground.halfspace = true;
-  ground.mu = spec_.mu;
-  ground.restitution = spec_.options.restitution;
-  object_colliders_.push_back(ground);
-  object_contacts_.clear();
-  object_contacts_.reserve(16 * bodies_.size());
+  for (const ObjectBody& b : bodies_) {
+    body_models_.push_back(b.model.get());
+    body_states_.push_back(b.initial);
+    body_a_.push_back(VecX::Zero(6));
+  }
+  if (spec_.ground) {  // the plane n.x = offset, solid below: z <= 0 of its shape frame
+    CollisionObject g;
+    g.name = "ground";
+    g.halfspace = true;
+    g.group = 1;
+    g.mu = spec_.mu;
+    g.restitution = spec_.options.restitution;
+    const Vec3 n = spec_.ground_normal.normalized();
+    Vec3 t1, t2;
+    tangent_basis(n, t1, t2);
+    g.placement.R.col(0) = t1;
+    g.placement.R.col(1) = t2;
+    g.placement.R.col(2) = n;
+    g.placement.p = spec_.ground_offset * n;
+    colliders.push_back(g);
+  }
+  if (!bodies_.empty()) {
+    CollisionOptions copt;
+    copt.margin = spec_.options.margin;
+    collision_ = std::make_unique<CollisionModel>(std::move(colliders), copt);
+    frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
+    collision_data_.contacts.reserve(64 * bodies_.size());
+  }
+  contacts_fresh_ = false;
   body_last_good_ = body_states_;
   rebuild_constraints();
   reset();
@@ -353,68 +376,18 @@ void Simulator::reset_objects() {
     body_last_good_[j] = bodies_[j].initial;
   }
   penetration_ = penetration_max_ = 0;
+  contacts_fresh_ = false;
 }
 
-double Simulator::object_ground_contacts() {
-  object_contacts_.clear();
-  double deepest = 0;
-  if (!spec_.ground) return 0;
-  const Vec3 n = spec_.ground_normal.normalized();
-  const double off = spec_.ground_offset;
-  const double margin = spec_.options.margin;
-  const int ground = static_cast<int>(object_colliders_.size()) - 1;
-  auto add = [&](int j, const Vec3& p) {
-    const double g = n.dot(p) - off;
-    deepest = std::max(deepest, -g);
-    if (g >= margin + 0.5) return;  // far: no row (the reach test is the solver's margin)
-    if (object_contacts_.size() == object_contacts_.capacity()) return;  // no allocation
-    Contact c;
-    c.a = ground;
-    c.b = j;
-    c.point = p;
-    c.normal = n;
-    c.depth = -g;
-    object_contacts_.push_back(c);
-  };
+double Simulator::collide_objects() {
+  if (!collision_) return 0;
   for (size_t j = 0; j < bodies_.size(); ++j) {
-    const SceneObject& o = object_specs_[bodies_[j].index];
-    const SE3& f = body_states_[j].base;
-    const int jj = static_cast<int>(j);
-    const Shape& sh = o.shape;
-    const Vec3 nb = f.R.transpose() * n;  // the normal in the object's frame
-    switch (sh.type) {
-      case ShapeType::Sphere:
-        add(jj, f.p - sh.radius * n);
-        break;
-      case ShapeType::Capsule:
-        for (int e = -1; e <= 1; e += 2) {
-          add(jj, f.act(Vec3(0, 0, 0.5 * e * sh.length)) - sh.radius * n);
-        }
-        break;
-      case ShapeType::Box:
-        for (int c = 0; c < 8; ++c) {
-          add(jj, f.act(0.5 * Vec3((c & 1) ? sh.box.x() : -sh.box.x(),
-                                   (c & 2) ? sh.box.y() : -sh.box.y(),
-                                   (c & 4) ? sh.box.z() : -sh.box.z())));
-        }
-        break;
-      case ShapeType::Cylinder:
-        for (int e = -1; e <= 1; e += 2) {
-          // The rim point lowest along n, and three more around the rim.
-          Vec3 radial(nb.x(), nb.y(), 0);
-          const double len = radial.norm();
-          const double t0 = len > 1e-9 ? std::atan2(-radial.y(), -radial.x()) : 0.0;
-          for (int k = 0; k < 4; ++k) {
-            const double t = t0 + k * M_PI / 2;
-            add(jj,
-                f.act(Vec3(sh.radius * std::cos(t), sh.radius * std::sin(t), 0.5 * e * sh.length)));
-          }
-        }
-        break;
-      case ShapeType::Mesh:  // meshes touch through the collision layer
-        break;
-    }
+    frame_poses_[model_->n + 1 + j] = body_states_[j].base;
   }
+  collide(*collision_, collision_data_, frame_poses_);
+  double deepest = 0;
+  for (const Contact& c : collision_data_.contacts) deepest = std::max(deepest, c.depth);
+  contacts_fresh_ = true;
   return deepest;
 }
 
@@ -435,9 +408,10 @@ void Simulator::rebuild_constraints() {
 
 void Simulator::set_constraints(const ConstraintSpec& spec) {
   spec_ = spec;
-  if (!object_colliders_.empty()) {
-    object_colliders_.back().mu = spec_.mu;
-    object_colliders_.back().restitution = spec_.options.restitution;
+  if (!object_specs_.empty()) {
+    const std::vector<SceneObject> objects = object_specs_;
+    set_objects(objects);  // the ground and its mu may have changed: a new collision model
+    return;
   }
   rebuild_constraints();
   reset();
@@ -519,15 +493,14 @@ bool Simulator::step() {
     ContactBodies cb;
     if (!bodies_.empty()) {
       for (size_t j = 0; j < bodies_.size(); ++j) {
-        const State& s = body_states_[j];
-        body_a_[j] = bodies_[j].stepper->acceleration(s.base, s.q, s.v, body_zero_);
+        free_body_acceleration(*bodies_[j].model, body_states_[j], body_a_[j]);
       }
-      object_ground_contacts();
+      if (!contacts_fresh_) collide_objects();
       cb.models = &body_models_;
       cb.states = &body_states_;
       cb.a_free = &body_a_;
-      cb.contacts = &object_contacts_;
-      cb.objects = &object_colliders_;
+      cb.contacts = &collision_data_.contacts;
+      cb.objects = &collision_->objects();
     }
     info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
   } else {
@@ -544,7 +517,7 @@ bool Simulator::step() {
   if (constraints_) {
     penetration_ = constraints_->report().penetration;
     if (!bodies_.empty()) {
-      penetration_ = std::max(penetration_, object_ground_contacts());
+      penetration_ = std::max(penetration_, collide_objects());
       for (size_t j = 0; j < bodies_.size(); ++j) {
         ObjectState& o = objects_[bodies_[j].index];
         o.pose = body_states_[j].base;
@@ -592,6 +565,7 @@ void Simulator::roll_back(const StepInfo& info) {
           std::to_string(E_ref_) + " J";
   }
   for (size_t j = 0; j < bodies_.size(); ++j) body_states_[j] = body_last_good_[j];
+  contacts_fresh_ = false;
   const State& back = to_checked ? last_checked_ : last_good_;
   state_.base = back.base;
   state_.q = back.q;
@@ -670,6 +644,7 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
   const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
   if (!spec.empty()) sim->set_constraints(spec);
+  if (!scene.objects.empty()) sim->set_objects(scene.objects);
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }

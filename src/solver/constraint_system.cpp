@@ -399,9 +399,11 @@ const VecX& ConstraintSystem::acceleration(const SE3& base, const VecX& q, const
   const MatX& Minv = minv(model_, data_, base, q);
   Yb_.noalias() = Minv * Psi_.transpose();  // D^-1 Psi^T
   Wb_.noalias() = Psi_ * Yb_;               // Psi D^-1 Psi^T
-  rhs_.noalias() = -(Psi_ * a_);
-  rhs_ -= gamma_;
-  if (alpha_ > 0) rhs_.noalias() -= alpha_ * (Psi_ * v);
+  // Written as GEMV updates: a negated or scaled product expression would be evaluated into a
+  // heap temporary first (Eigen, found by counting calloc).
+  rhs_ = -gamma_;
+  rhs_.noalias() -= Psi_ * a_;
+  if (alpha_ > 0) rhs_.noalias() -= (alpha_ * Psi_) * v;
   if (beta2_ > 0) rhs_ -= beta2_ * phi_;
   solve_multipliers(rhs_, lambda_);
   a_.noalias() += Yb_ * lambda_;
@@ -432,7 +434,8 @@ double ConstraintSystem::project(State& x) {
   const MatX& Minv = minv(model_, data_, x.base, x.q);
   Yb_.noalias() = Minv * Psi_.transpose();
   Wb_.noalias() = Psi_ * Yb_;
-  rhs_.noalias() = -(Psi_ * x.v);
+  rhs_.setZero();
+  rhs_.noalias() -= Psi_ * x.v;
   solve_multipliers(rhs_, mult_);
   x.v.noalias() += Yb_ * mult_;
   report_.bilateral_error = err;
