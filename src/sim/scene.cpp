@@ -320,6 +320,9 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
     m = make_chain(std::atoi(scene.robot_path.c_str() + 6), scene.floating, scene.chain_masses,
                    scene.chain_length);
   } else {
+    if (urdf_xml.empty() && scene.robot_path.empty()) {
+      throw SceneError(scene.file + ": the scene names no robot and none was given");
+    }
     UrdfOptions opt;
     opt.floating = scene.floating;
     opt.locked = scene.locked_joints;
