@@ -11,6 +11,7 @@
 #include <new>
 #include <random>
 
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "test_util.h"
 
@@ -220,6 +221,51 @@ TEST(Alloc, RomeoFloating) {
   opt.floating = true;
   check_no_allocation("romeo floating",
                       model_from_urdf_file(se3_test::robot_path("romeo_small.urdf"), opt));
+}
+
+// collide() against the ground (hulls, boxes, cylinders, spheres: the half-space tests of the
+// collision layer) and through FCL's broad phase allocates nothing after its first call. (Pairs
+// FCL's narrow phase tests do allocate: its GJK makes its shape objects with new on every
+// query, about 5 allocations per pair; docs/collision.md.)
+TEST(Alloc, CollideOnTheGround) {
+  const Scene s =
+      load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/quadruped_ground.yaml");
+  const Model m = scene_model(s);
+  SceneCollision sc = scene_collision(s, &m);
+  State x = scene_state(s, m);
+  Data d(m);
+  x.base.p.z() = 0.23;  // the feet and shins in the ground
+  forward_kinematics(m, d, x.base, x.q);
+  std::vector<SE3> frames;
+  scene_frame_poses(d.oMb, {}, frames);
+  CollisionData cd;
+  collide(sc.model, cd, frames);
+  EXPECT_GE(cd.contacts.size(), 8u);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 20; ++k) collide(sc.model, cd, frames);
+            }),
+            0);
+  // Objects on the ground, apart from each other (only the broad phase sees their pairs).
+  Scene o = parse_scene(
+      "ground: true\nobjects:\n  - {name: a, shape: {box: [0.2, 0.2, 0.2]}, mass: 1}\n"
+      "  - {name: b, shape: {cylinder: [0.1, 0.2]}, mass: 1}\n"
+      "  - {name: c, shape: {sphere: 0.1}, mass: 1}\n",
+      ".", "o.yaml");
+  SceneCollision oc = scene_collision(o, nullptr);
+  std::vector<SE3> poses = {SE3(Mat3::Identity(), Vec3(0, 0, 0.099)),
+                            SE3(Mat3::Identity(), Vec3(1, 0, 0.099)),
+                            SE3(Mat3::Identity(), Vec3(2, 0, 0.099))};
+  scene_frame_poses({}, poses, frames);
+  collide(oc.model, cd, frames);
+  EXPECT_EQ(cd.contacts.size(), 9u);  // 4 + 4 + 1
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 20; ++k) {
+                poses[0].p.x() = 0.001 * k;
+                scene_frame_poses({}, poses, frames);
+                collide(oc.model, cd, frames);
+              }
+            }),
+            0);
 }
 
 // A whole Simulator step (stepper, passive forces, divergence guard with its energy checks,

@@ -3,8 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
 #include <string>
 
+#include "se3_sim/dynamics.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 using namespace se3;
@@ -211,6 +216,160 @@ TEST(SceneObjects, BadInputIsOneLineNamingLineAndKey) {
     EXPECT_NE(e.find(c.expect), std::string::npos) << c.text << "\n  gave: '" << e << "'";
     EXPECT_EQ(e.find('\n'), std::string::npos) << e;
   }
+}
+
+TEST(SceneCollision, FramesOfRobotAndObjects) {
+  const Scene s = parse_scene(
+      "robot: chain:2\nbase: fixed\nground: {mu: 0.5}\nobjects:\n"
+      "  - {name: table, shape: {box: [1, 1, 0.1]}}\n"
+      "  - {name: a, shape: {sphere: 0.1}, mass: 1, mu: 0.3}\n"
+      "  - {name: b, shape: {box: [0.1, 0.1, 0.1]}, mass: 1}\n",
+      kData, "s.yaml");
+  const Model m = scene_model(s);
+  const SceneCollision sc = scene_collision(s, &m);
+  EXPECT_EQ(sc.robot_bodies, 3);  // chain:2 fixed: bodies 0, 1, 2
+  EXPECT_EQ(sc.free_objects, 2);
+  ASSERT_EQ(sc.object_frame.size(), 3u);
+  EXPECT_EQ(sc.object_frame[0], CollisionObject::kWorld);
+  EXPECT_EQ(sc.object_frame[1], 3);
+  EXPECT_EQ(sc.object_frame[2], 4);
+  ASSERT_GE(sc.ground, 0);
+  const auto& objs = sc.model.objects();
+  EXPECT_TRUE(objs[sc.ground].halfspace);
+  EXPECT_DOUBLE_EQ(objs[sc.ground].mu, 0.5);
+  std::size_t robot = 0;
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    if (sc.body[i] >= 0) {
+      ++robot;
+      EXPECT_EQ(objs[i].group, 0);
+      EXPECT_EQ(objs[i].frame, sc.body[i]);
+    }
+    if (sc.scene_object[i] == 1) EXPECT_DOUBLE_EQ(objs[i].mu, 0.3);
+  }
+  EXPECT_EQ(robot, scene_geometry(s, m).collisions.size());
+  // Objects only: frames start at 0.
+  const Scene o = parse_scene(
+      "objects:\n  - {name: a, shape: {sphere: 0.1}, mass: 1}\n"
+      "  - {name: b, shape: {sphere: 0.1}, pose: {position: [0, 1, 0]}}\n  - {name: c, shape: "
+      "{sphere: 0.1}, mass: 2}\n",
+      kData, "o.yaml");
+  const SceneCollision oc = scene_collision(o, nullptr);
+  EXPECT_EQ(oc.robot_bodies, 0);
+  EXPECT_EQ(oc.object_frame, (std::vector<int>{0, CollisionObject::kWorld, 1}));
+  std::vector<SE3> frames;
+  scene_frame_poses(
+      {}, {SE3(Mat3::Identity(), Vec3(0, 0, 0)), SE3(Mat3::Identity(), Vec3(0.15, 0, 0))}, frames);
+  CollisionData d;
+  collide(const_cast<CollisionModel&>(oc.model), d, frames);
+  ASSERT_EQ(d.contacts.size(), 1u);  // a and c, 0.15 apart: overlapping by 5 cm
+  EXPECT_NEAR(d.contacts[0].depth, 0.05, 1e-9);
+}
+
+// Solo-12's collision shapes are all meshes: on the ground they must touch it (the humanoid of
+// issue 14 fell 18 m because meshes were skipped).
+TEST(SceneCollision, MeshOnlyRobotTouchesTheGround) {
+  const Scene s = load_scene(kRoot + "/config/scenes/quadruped_ground.yaml");
+  const Model m = scene_model(s);
+  SceneCollision sc = scene_collision(s, &m);
+  EXPECT_TRUE(sc.warnings.empty()) << sc.warnings[0];
+  const auto& objs = sc.model.objects();
+  int meshes = 0;
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    if (sc.body[i] >= 0 && objs[i].shape.type == ShapeType::Mesh) {
+      ++meshes;
+      ASSERT_NE(sc.model.hull(int(i)), nullptr);
+    }
+  }
+  EXPECT_EQ(meshes, 17);
+  // At the scene's initial joint angles, lower the base until the lowest hull vertex is 1 mm
+  // below the ground.
+  State x = scene_state(s, m);
+  Data data(m);
+  x.base.p.z() = 0;
+  forward_kinematics(m, data, x.base, x.q);
+  double lowest = INFINITY;
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    if (sc.body[i] < 0 || objs[i].shape.type != ShapeType::Mesh) continue;
+    const SE3 T = data.oMb[sc.body[i]] * objs[i].placement;
+    for (const Vec3& v : sc.model.hull(int(i))->vertices) {
+      if ((T.R * v + T.p).z() < lowest) {
+        lowest = (T.R * v + T.p).z();
+      }
+    }
+  }
+  x.base.p.z() = -lowest - 0.001;
+  forward_kinematics(m, data, x.base, x.q);
+  std::vector<SE3> frames;
+  scene_frame_poses(data.oMb, {}, frames);
+  CollisionData d;
+  collide(sc.model, d, frames);
+  double deepest = -INFINITY;
+  std::set<int> touching;                // bodies whose meshes touch the ground
+  for (const Contact& c : d.contacts) {  // (the scene's contacts: spheres are lower still)
+    if (c.a != sc.ground || objs[c.b].shape.type != ShapeType::Mesh) continue;
+    deepest = std::max(deepest, c.depth);
+    if (c.depth > 0) touching.insert(sc.body[c.b]);
+  }
+  EXPECT_NEAR(deepest, 0.001, 1e-9);
+  EXPECT_EQ(touching.size(), 4u);  // the four feet, equally low at the scene's joint angles
+  // 5 cm up, beyond the margin: no ground contact.
+  x.base.p.z() += 0.05;
+  forward_kinematics(m, data, x.base, x.q);
+  scene_frame_poses(data.oMb, {}, frames);
+  collide(sc.model, d, frames);
+  for (const Contact& c : d.contacts) EXPECT_NE(c.a, sc.ground);
+}
+
+TEST(SceneCollision, PandaSrdfAndSelfCollision) {
+  const std::string srdf = "meshes/example-robot-data/robots/panda_description/srdf/panda.srdf";
+  auto contacts_at_home = [&](const std::string& extra, int* self) {
+    const Scene s = parse_scene("robot: robots/panda.urdf\nbase: fixed\nground: true\n" + extra,
+                                kData, "panda.yaml");
+    const Model m = scene_model(s);
+    SceneCollision sc = scene_collision(s, &m);
+    State x = scene_state(s, m);
+    Data data(m);
+    forward_kinematics(m, data, x.base, x.q);
+    std::vector<SE3> frames;
+    scene_frame_poses(data.oMb, {}, frames);
+    CollisionData d;
+    collide(sc.model, d, frames);
+    *self = 0;
+    for (const Contact& c : d.contacts) {
+      EXPECT_NE(c.a, sc.ground) << "the fixed base touches the ground";
+      if (sc.body[c.a] >= 0 && sc.body[c.b] >= 0 && c.depth > 0) ++*self;  // penetrating
+    }
+    return d.contacts.size();
+  };
+  int off = 0, on = 0, srdf_on = 0;
+  contacts_at_home("", &off);
+  contacts_at_home("self_collision: true\n", &on);
+  contacts_at_home("self_collision: true\nsrdf: " + srdf + "\n", &srdf_on);
+  EXPECT_EQ(off, 0);
+  EXPECT_GT(on, 0);       // hulls of non-adjacent links overlap at q = 0 (hand and link 6, ...)
+  EXPECT_EQ(srdf_on, 0);  // the SRDF disables exactly those
+}
+
+TEST(SceneCollision, SrdfNamingUnknownLinksIsOneLine) {
+  const std::string path = testing::TempDir() + "/bad.srdf";
+  {
+    std::ofstream out(path);
+    out << "<robot name='panda'>\n<disable_collisions link1='panda_link0' link2='no_such_link'/>\n"
+           "</robot>\n";
+  }
+  const Scene s = parse_scene("robot: chain:2\nsrdf: " + path + "\n", kData, "s.yaml");
+  const Model m = scene_model(s);
+  try {
+    scene_collision(s, &m);
+    FAIL();
+  } catch (const SceneError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("s.yaml"), std::string::npos) << w;
+    EXPECT_NE(w.find("bad.srdf"), std::string::npos) << w;
+    EXPECT_NE(w.find("'panda_link0'"), std::string::npos) << w;  // the first unknown
+    EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+  }
+  std::remove(path.c_str());
 }
 
 int main(int argc, char** argv) {

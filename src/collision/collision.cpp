@@ -58,7 +58,8 @@ struct CollisionModel::Impl {
   // Half-space candidates: points and their signed distances (reserved once).
   std::vector<Vec3> points;
   std::vector<double> gaps;
-  std::vector<int> picked;
+  std::vector<int> picked, cand;
+  std::vector<double> dist;
 
   bool ok(int i, int j) const { return allowed[std::size_t(i) * n + j] != 0; }
 };
@@ -67,10 +68,10 @@ namespace {
 
 // Points of shape i (world) that may touch the plane n.x = offset (n unit, solid below): the
 // deepest point of a sphere, the 8 corners of a box, 4 points on each rim of a cylinder (the
-// lowest, the highest and the two between), the two cap bottoms of a capsule, a hull's
-// vertices.
-void halfspace_candidates(const CollisionObject& o, const ConvexHull* hull, const SE3& T,
-                          const Vec3& n, std::vector<Vec3>& pts) {
+// lowest, the highest and the two between), the two cap bottoms of a capsule. (A hull's
+// vertices are used in place.)
+void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
+                          std::vector<Vec3>& pts) {
   pts.clear();
   const Shape& s = o.shape;
   switch (s.type) {
@@ -109,44 +110,45 @@ void halfspace_candidates(const CollisionObject& o, const ConvexHull* hull, cons
       pts.push_back(T.p - s.length / 2 * a - s.radius * n);
       break;
     }
-    case ShapeType::Mesh:
-      if (hull) {
-        for (const Vec3& v : hull->vertices) pts.push_back(T.p + T.R * v);
-      }
+    case ShapeType::Mesh:  // the hull's vertices, used in place
       break;
   }
 }
 
 // Up to max of the candidates below the margin: the deepest first, then each next the one
 // farthest (across the normal) from those already picked, so that a resting face keeps its
-// corners. picked gets indices, deepest first.
+// corners (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first;
+// cand and dist are workspaces.
 void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, const Vec3& n,
-                 double margin, int max, std::vector<int>& picked) {
+                 double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
+                 std::vector<double>& dist) {
   picked.clear();
+  cand.clear();
   int deepest = -1;
   for (int i = 0; i < int(pts.size()); ++i) {
-    if (gaps[i] < margin && (deepest < 0 || gaps[i] < gaps[deepest])) deepest = i;
+    if (!(gaps[i] < margin)) continue;
+    cand.push_back(i);
+    if (deepest < 0 || gaps[i] < gaps[deepest]) deepest = i;
   }
   if (deepest < 0) return;
   picked.push_back(deepest);
+  dist.assign(cand.size(), INFINITY);
+  int last = deepest;
   while (int(picked.size()) < max) {
     int best = -1;
     double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
-    for (int i = 0; i < int(pts.size()); ++i) {
-      if (!(gaps[i] < margin)) continue;
-      double d = INFINITY;
-      for (int p : picked) {
-        Vec3 r = pts[i] - pts[p];
-        r -= r.dot(n) * n;
-        d = std::min(d, r.squaredNorm());
-      }
-      if (d > best_d) {
-        best_d = d;
-        best = i;
+    for (std::size_t k = 0; k < cand.size(); ++k) {
+      Vec3 r = pts[cand[k]] - pts[last];
+      r -= r.dot(n) * n;
+      dist[k] = std::min(dist[k], r.squaredNorm());
+      if (dist[k] > best_d) {
+        best_d = dist[k];
+        best = cand[k];
       }
     }
     if (best < 0) break;
     picked.push_back(best);
+    last = best;
   }
   std::sort(picked.begin(), picked.end(), [&](int x, int y) { return gaps[x] < gaps[y]; });
 }
@@ -166,17 +168,26 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
     if (n.dot(c) - offset - r.cwiseProduct(n.cwiseAbs()).sum() > m.margin) return;
   }
   ++m.data->pairs_tested;
-  halfspace_candidates(o, m.hulls[b].get(), T, n, m.points);
-  m.gaps.resize(m.points.size());
-  for (std::size_t i = 0; i < m.points.size(); ++i) m.gaps[i] = n.dot(m.points[i]) - offset;
-  pick_points(m.points, m.gaps, n, m.margin, m.max_contacts, m.picked);
+  // In the shape's frame: gap = n_l . v + d0 per candidate point v (one dot product per hull
+  // vertex; only the picked points are carried to the world).
+  const Vec3 nl = T.R.transpose() * n;
+  const double d0 = n.dot(T.p) - offset;
+  const std::vector<Vec3>* pts = &m.points;
+  if (o.shape.type == ShapeType::Mesh) {
+    pts = &m.hulls[b]->vertices;
+  } else {
+    halfspace_candidates(o, SE3(), nl, m.points);
+  }
+  for (std::size_t i = 0; i < pts->size(); ++i) m.gaps[i] = nl.dot((*pts)[i]) + d0;
+  pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist);
   for (int i : m.picked) {
     Contact c;
     c.a = h;
     c.b = b;
     c.normal = n;
     c.depth = -m.gaps[i];
-    c.point = m.points[i] + c.depth / 2 * n;  // midway between the shape and the plane
+    // Midway between the shape's point and the plane.
+    c.point = T.p + T.R * (*pts)[i] + c.depth / 2 * n;
     m.data->contacts.push_back(c);
   }
 }
@@ -418,15 +429,15 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
   m.dist_request.enable_signed_distance = false;
   m.margin = options_.margin;
   m.max_contacts = options_.max_contacts_per_pair;
-  m.points.reserve(64);
-  m.gaps.reserve(64);
   m.picked.reserve(std::size_t(options_.max_contacts_per_pair) + 1);
   std::size_t most = 8;
   for (const auto& h : m.hulls) {
     if (h) most = std::max(most, h->vertices.size());
   }
   m.points.reserve(most);
-  m.gaps.reserve(most);
+  m.gaps.assign(most, 0.0);  // sized once: at least as many as any object's candidates
+  m.cand.reserve(most);
+  m.dist.reserve(most);
 }
 
 CollisionModel::~CollisionModel() = default;
