@@ -16,7 +16,9 @@ import subprocess
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DRIVER = os.path.join(REPO, ".build/ws/devel/lib/se3_sim/callgrind_dynamics")
+# The catkin workspace of scripts/build.sh (scripts/env.sh): $SE3_SIM_WS, else beside the clone.
+WS = os.environ.get("SE3_SIM_WS") or os.path.join(os.path.dirname(REPO), os.path.basename(REPO) + "_ws")
+DRIVER = os.path.join(WS, "devel/lib/se3_sim/callgrind_dynamics")
 SUBJECTS = ["ur5", "panda7", "solo12_free", "chain200", "chain200_free"]
 ALGOS = ["fk", "rnea", "aba", "crba", "minv"]
 FUNCTION = {"fk": r"^se3::forward_kinematics\(", "rnea": r"^se3::rnea\(",

@@ -20,7 +20,9 @@ import sys
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SE3_DYN = os.path.join(REPO, ".build/ws/devel/lib/se3_sim/se3_dyn")
+# The catkin workspace of scripts/build.sh (scripts/env.sh): $SE3_SIM_WS, else beside the clone.
+WS = os.environ.get("SE3_SIM_WS") or os.path.join(os.path.dirname(REPO), os.path.basename(REPO) + "_ws")
+SE3_DYN = os.path.join(WS, "devel/lib/se3_sim/se3_dyn")
 DEFAULT = ["fixed_panda:semi_implicit_euler", "fixed_panda:euler", "fixed_panda:rkmk4",
            "satellite_arm:semi_implicit_euler", "satellite_arm:rkmk4",
            "fixed_arm:semi_implicit_euler", "fixed_arm:rkmk4",

@@ -18,7 +18,8 @@ if [[ -z "${CHARTS_BIN:-}" ]]; then
       python3-matplotlib >/dev/null
   bash "$repo/scripts/build.sh"
 fi
-bin=${CHARTS_BIN:-$repo/.build/ws/devel/lib/se3_sim/charts_data}
+source "$repo/scripts/env.sh"  # SE3_SIM_WS, the workspace
+bin=${CHARTS_BIN:-$SE3_SIM_WS/devel/lib/se3_sim/charts_data}
 [[ -x "$bin" ]] || { echo "charts: $bin not found; build first (bash scripts/build.sh)"; exit 1; }
 /usr/bin/python3 -c 'import matplotlib' 2>/dev/null ||
   { echo "charts: python3-matplotlib missing (apt-get install python3-matplotlib)"; exit 1; }

@@ -24,7 +24,7 @@ if ((${#targets[@]} == 0)); then
   for f in "$repo"/fuzz/fuzz_*.cpp; do n=$(basename "$f" .cpp); targets+=("${n#fuzz_}"); done
 fi
 ((build)) && bash "$repo/scripts/sanitize.sh" --no-gtests --no-fuzz
-bin="$repo/.build/san/ws/devel/lib/se3_sim"
+bin="${SE3_SIM_SAN_WS:-$(dirname "$repo")/$(basename "$repo")_san_ws}/devel/lib/se3_sim"
 declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes"
   [controllers]="config/controllers")
 export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1"

@@ -6,7 +6,7 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 bash "$repo/scripts/deps.sh" --test
 bash "$repo/scripts/build.sh"
 source "$repo/scripts/env.sh"
-ws="$repo/.build/ws"
+ws=$SE3_SIM_WS
 rm -rf "$ws/build/test_results"
 cd "$ws"
 echo "se3_sim: building and running the tests (log: .build/test.log)"

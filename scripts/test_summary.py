@@ -46,7 +46,13 @@ def cases(path):
 
 
 def main():
-    results = sys.argv[1] if len(sys.argv) > 1 else '.build/ws/build/test_results'
+    if len(sys.argv) > 1:
+        results = sys.argv[1]
+    else:  # the workspace of scripts/build.sh: $SE3_SIM_WS, else beside the clone
+        repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        ws = os.environ.get('SE3_SIM_WS') or os.path.join(
+            os.path.dirname(repo), os.path.basename(repo) + '_ws')
+        results = os.path.join(ws, 'build', 'test_results')
     passed = failed = skipped = 0
     files = sorted(glob.glob(os.path.join(results, '**', '*.xml'), recursive=True))
     for f in files:

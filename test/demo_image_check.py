@@ -4,7 +4,7 @@
 The camera is level (eye and target at the same height), so the horizon is the middle row and
 each sky row has one colour. Every link with visual geometry that the simulator publishes on
 TF (a tree: /tf and /tf_static, composed up to world) and whose origin projects into the sky
-(above the horizon, inside the image) must be drawn there: its pixel differs from that row's sky colour, read at the image's right edge. Frames
+(above the horizon, inside the image) must be drawn there: its pixel (or one within 5 px) differs from that row's sky colour, read at the image's right edge. Frames
 without geometry (panda_hand_tcp, a point between the finger tips) can lie over the sky. The image is read as raw bytes
 (rospy.AnyMsg), so no Python sensor_msgs package is needed.
 """
@@ -78,9 +78,17 @@ class DemoImageTest(unittest.TestCase):
                 u, v = uv
                 if not (20 < u < W - 60 and 40 < v < H / 2 - 20):
                     continue  # not in the sky part of the image
-                sky = self.px(data, W - 5, v)
-                got = self.px(data, u, v)
-                self.assertGreater(sum(abs(a - b) for a, b in zip(got, sky)), 30,
+                # The image and the TF this test holds may be a publish period apart while the
+                # arm moves, so a link origin on the edge of its mesh is looked for within
+                # kNear pixels (2.5 cm at this distance) rather than at one pixel.
+                kNear = 5
+                best = 0
+                for du in range(-kNear, kNear + 1, kNear):
+                    for dv in range(-kNear, kNear + 1, kNear):
+                        sky = self.px(data, W - 5, v + dv)
+                        got = self.px(data, u + du, v + dv)
+                        best = max(best, sum(abs(a - b) for a, b in zip(got, sky)))
+                self.assertGreater(best, 30,
                                    "link %s at pixel (%.0f, %.0f) looks like the sky" % (name, u, v))
                 checked += 1
         self.assertGreater(checked, 2, "too few links projected into the sky")

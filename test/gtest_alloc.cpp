@@ -350,3 +350,78 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// Constraint and contact steps (constraints.h through integrate.h's constrained_step) allocate
+// nothing after the first, counting malloc as well as operator new: the four-bar loop (rkmk4
+// with eq. (32) in every stage, projection), the pinned chain, Solo12 on the ground (the
+// velocity level, PGS and the active-set solver), and free objects on the ground in a
+// Simulator (rows from outside contacts, free bodies). Collision detection is not in these
+// steps (the ground contacts are the sim layer's own).
+TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
+  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  for (const char* name : {"fourbar", "pinned_chain", "quadruped_ground"}) {
+    for (ContactSolver solver : {ContactSolver::PGS, ContactSolver::ActiveSet}) {
+      SCOPED_TRACE(std::string(name) + (solver == ContactSolver::PGS ? " pgs" : " active_set"));
+      Scene sc = load_scene(scenes + name + ".yaml");
+      sc.constraints.options.solver = solver;
+      const Model m = scene_model(sc);
+      ConstraintSystem cs(m, scene_constraints(sc, m));
+      State x = scene_state(sc, m);
+      cs.anchor(x);
+      auto stepper = make_stepper(sc.integrator, m);
+      const VecX tau = VecX::Zero(m.nv);
+      for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt).ok);
+      EXPECT_EQ(allocations_of([&] {
+                  for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt);
+                }),
+                0);
+    }
+  }
+  // Free bodies with contacts from outside (the collision layer's list; collide() itself, FCL's,
+  // is not counted here): a robot on the ground plus two boxes, one resting on the ground at its
+  // four corners, one on it.
+  const Scene sc = load_scene(scenes + "quadruped_ground.yaml");
+  const Model m = scene_model(sc);
+  ConstraintSystem cs(m, scene_constraints(sc, m));
+  std::vector<Model> boxes(2);
+  std::vector<const Model*> models;
+  for (Model& b : boxes) {
+    b.floating = true;
+    b.start_with_base("box", Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity()));
+    b.finalize();
+    models.push_back(&b);
+  }
+  cs.set_free_bodies(models, 16);
+  std::vector<State> states = {State(boxes[0]), State(boxes[1])};
+  states[0].base.p = Vec3(2, 0, 0.1);
+  states[1].base.p = Vec3(2, 0, 0.3);
+  std::vector<VecX> a_free(2, VecX::Zero(6));
+  for (VecX& a : a_free) a[5] = -9.81;
+  std::vector<CollisionObject> objects(3);
+  objects[0].frame = m.n + 1;
+  objects[1].frame = m.n + 2;
+  objects[2].frame = CollisionObject::kWorld;  // the ground
+  std::vector<Contact> contacts;
+  for (int k = 0; k < 8; ++k) {
+    Contact c;
+    c.a = k < 4 ? 2 : 0;
+    c.b = k < 4 ? 0 : 1;
+    c.point = Vec3(2 + ((k & 1) ? 0.1 : -0.1), (k & 2) ? 0.1 : -0.1, k < 4 ? 0.0 : 0.2);
+    contacts.push_back(c);
+  }
+  ContactBodies cb;
+  cb.models = &models;
+  cb.states = &states;
+  cb.a_free = &a_free;
+  cb.contacts = &contacts;
+  cb.objects = &objects;
+  State x = scene_state(sc, m);
+  auto stepper = make_stepper(sc.integrator, m);
+  const VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt, cb).ok);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt, cb);
+            }),
+            0);
+  EXPECT_LT(states[1].v.norm(), 1e-3);  // the contacts held the boxes
+}

@@ -223,21 +223,21 @@ TEST(TeleopController, JointsFromModel) {
 
 TEST(TeleopController, DigitsSelectAndPlusMinusActOnTheSelectedJoint) {
   Params p;
-  p.step = 2.0;
+  p.step = 0.25;  // a quarter of each joint's limit: a 21.75, b 3, c 1.25
   Controller c(three_joints(), p);
   InputDecoder d;
   EXPECT_EQ(c.selected(), 0);
   type(c, d, "2+++", 0.0);
   EXPECT_EQ(c.selected(), 1);
-  EXPECT_EQ(c.torques(), (std::vector<double>{0, 6, 0}));
+  EXPECT_EQ(c.torques(), (std::vector<double>{0, 9, 0}));
   type(c, d, "1-", 0.1);
-  EXPECT_EQ(c.torques(), (std::vector<double>{-2, 6, 0}));
+  EXPECT_EQ(c.torques(), (std::vector<double>{-21.75, 9, 0}));
   type(c, d, "=", 0.2);  // '=' raises too (unshifted '+')
-  EXPECT_EQ(c.torques(), (std::vector<double>{0, 6, 0}));
+  EXPECT_EQ(c.torques(), (std::vector<double>{0, 9, 0}));
   type(c, d, "9", 0.3);  // no joint 9: selection unchanged
   EXPECT_EQ(c.selected(), 0);
   type(c, d, "3-\x7f", 0.4);  // Backspace zeroes the selected joint
-  EXPECT_EQ(c.torques(), (std::vector<double>{0, 6, 0}));
+  EXPECT_EQ(c.torques(), (std::vector<double>{0, 9, 0}));
   type(c, d, " ", 0.5);  // space zeroes all
   EXPECT_EQ(c.torques(), (std::vector<double>{0, 0, 0}));
 }
@@ -257,7 +257,7 @@ TEST(TeleopController, TabAndArrowsWrapAround) {
 
 TEST(TeleopController, TorquesAreClampedToEffortLimits) {
   Params p;
-  p.step = 5.0;
+  p.step = 0.5;
   Controller c(three_joints(), p);
   InputDecoder d;
   type(c, d, "2" + std::string(10, '+'), 0);
@@ -270,17 +270,37 @@ TEST(TeleopController, TorquesAreClampedToEffortLimits) {
 
 TEST(TeleopController, StepScaling) {
   Params p;
-  p.step = 1.0;
+  p.step = 0.1;
   Controller c(three_joints(), p);
   InputDecoder d;
   type(c, d, "]]", 0);
-  EXPECT_DOUBLE_EQ(c.step(), 4.0);
+  EXPECT_DOUBLE_EQ(c.step(), 0.4);
   type(c, d, "/[[", 0);
-  EXPECT_DOUBLE_EQ(c.step(), 0.5);
+  EXPECT_DOUBLE_EQ(c.step(), 0.05);
   type(c, d, "*+", 0);
-  EXPECT_DOUBLE_EQ(c.torques()[0], 1.0);
+  EXPECT_DOUBLE_EQ(c.torques()[0], 8.7);
   for (int i = 0; i < 100; ++i) c.scale_step(0.5);
   EXPECT_DOUBLE_EQ(c.step(), p.min_step);
+  for (int i = 0; i < 100; ++i) c.scale_step(2);
+  EXPECT_DOUBLE_EQ(c.step(), 1.0);  // one press: the whole limit
+}
+
+// The step is a fraction of each joint's own effort limit: the same number of presses takes
+// an 87 N m joint and a 12 N m one to the same fraction of their limits.
+TEST(TeleopController, StepScalesWithEachJointsEffortLimit) {
+  std::vector<JointInfo> j = three_joints();
+  j[2].limit = std::numeric_limits<double>::infinity();  // no URDF limit: the default, 10
+  Controller c(j);                                       // default step 0.05
+  EXPECT_DOUBLE_EQ(c.joint_step(0), 0.05 * 87);
+  EXPECT_DOUBLE_EQ(c.joint_step(1), 0.05 * 12);
+  EXPECT_DOUBLE_EQ(c.joint_step(2), 0.05 * 10);
+  InputDecoder d;
+  type(c, d, "1++++2++++3++++", 0);
+  EXPECT_NEAR(c.torques()[0], 0.2 * 87, 1e-9);
+  EXPECT_NEAR(c.torques()[1], 0.2 * 12, 1e-9);
+  EXPECT_NEAR(c.torques()[2], 0.2 * 10, 1e-9);
+  type(c, d, "1" + std::string(20, '+'), 0);  // twenty presses from zero reach the limit
+  EXPECT_DOUBLE_EQ(c.torques()[0], 87.0);
 }
 
 TEST(TeleopController, MouseDragSetsTorqueProportionally) {
@@ -309,7 +329,7 @@ TEST(TeleopController, WheelChangesSelectionAndMiddleClickZeroesAll) {
   EXPECT_EQ(c.selected(), 1);
   type(c, d, "+\x1b[<65;1;1M+\x1b[<64;1;1M\x1b[<64;1;1M", 0);
   EXPECT_EQ(c.selected(), 0);
-  EXPECT_EQ(c.torques(), (std::vector<double>{0, 1, 1}));
+  EXPECT_EQ(c.torques(), (std::vector<double>{0, 0.6, 0.25}));  // 5 % of 12 and of 5
   type(c, d, "\x1b[<1;4;4M\x1b[<1;4;4m", 0);
   EXPECT_EQ(c.torques(), (std::vector<double>{0, 0, 0}));
 }
@@ -340,17 +360,17 @@ TEST(TeleopController, CameraKeysAndRightDrag) {
 TEST(TeleopController, DeadManZeroesTorquesAfterTimeout) {
   Params p;
   p.timeout = 1.0;
-  p.step = 3.0;
+  p.step = 0.1;  // 8.7 N m on joint a
   Controller c(three_joints(), p);
   InputDecoder d;
   c.update(100.0);  // no input yet: nothing to do
   EXPECT_FALSE(c.dead_man_tripped());
   type(c, d, "++", 10.0);
   c.update(10.5);
-  EXPECT_DOUBLE_EQ(c.torques()[0], 6.0);
+  EXPECT_DOUBLE_EQ(c.torques()[0], 17.4);
   type(c, d, "+", 10.9);  // input resets the timer
   c.update(11.8);
-  EXPECT_DOUBLE_EQ(c.torques()[0], 9.0);
+  EXPECT_DOUBLE_EQ(c.torques()[0], 26.1);
   EXPECT_FALSE(c.dead_man_tripped());
   c.update(11.95);
   EXPECT_DOUBLE_EQ(c.torques()[0], 0.0);
@@ -358,7 +378,7 @@ TEST(TeleopController, DeadManZeroesTorquesAfterTimeout) {
   EXPECT_NE(c.panel().find("IDLE"), std::string::npos);
   type(c, d, "+", 12.0);  // starts again from zero
   EXPECT_FALSE(c.dead_man_tripped());
-  EXPECT_DOUBLE_EQ(c.torques()[0], 3.0);
+  EXPECT_DOUBLE_EQ(c.torques()[0], 8.7);
   // A mouse drag keeps it alive like keys do.
   type(c, d, "\x1b[<0;10;1M", 12.5);
   type(c, d, "\x1b[<32;14;1M", 13.4);
@@ -375,7 +395,7 @@ TEST(TeleopController, DeadManOffWhenTimeoutIsZero) {
   InputDecoder d;
   type(c, d, "+", 0.0);
   c.update(1e6);
-  EXPECT_DOUBLE_EQ(c.torques()[0], 1.0);
+  EXPECT_DOUBLE_EQ(c.torques()[0], 4.35);
 }
 
 TEST(TeleopController, QuitZeroesTorques) {
@@ -400,12 +420,73 @@ TEST(TeleopController, PanelShowsKeysSelectionTorquesAndLimits) {
   type(c, d, "2++", 0);
   const std::string s = c.panel();
   EXPECT_NE(s.find("+ or = raise"), std::string::npos);
-  EXPECT_NE(s.find("q or Ctrl-C quit"), std::string::npos);
+  EXPECT_NE(s.find("q quit"), std::string::npos);
+  EXPECT_NE(s.find("step 5 % of limit"), std::string::npos) << s;
   EXPECT_NE(s.find(">   2  b"), std::string::npos) << s;
-  EXPECT_NE(s.find("+2.000"), std::string::npos) << s;
+  EXPECT_NE(s.find("+1.200"), std::string::npos) << s;
   EXPECT_NE(s.find("12.000"), std::string::npos) << s;
   EXPECT_NE(s.find("4.000*"), std::string::npos) << s;
   EXPECT_NE(s.find("default limit 4"), std::string::npos) << s;
+}
+
+namespace {
+
+std::vector<std::string> lines_of(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t a = 0;
+  while (a < s.size()) {
+    const std::size_t b = s.find('\n', a);
+    out.push_back(s.substr(a, b - a));
+    a = b == std::string::npos ? s.size() : b + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+// The panel fits the terminal: no line reaches the last column (it would wrap), no more lines
+// than rows, and with more joints than rows a window around the selected joint with the count
+// of those above and below.
+TEST(TeleopController, PanelFitsTheTerminal) {
+  std::vector<JointInfo> j;
+  for (int i = 0; i < 37; ++i) {  // Romeo's 37 joints, with long names
+    j.push_back({"a_rather_long_joint_name_number_" + std::to_string(i), 10.0 + i, true});
+  }
+  Controller c(j);
+  InputDecoder d;
+  type(c, d, "\x1b[B\x1b[B", 0);  // joint 3
+  const std::string footer =
+      "-> /torque_command at 20 Hz (1 subscriber), camera "
+      "/renderer/camera_command";
+  for (const auto& size : {std::pair<int, int>{80, 24}, {100, 40}, {40, 10}, {20, 8}}) {
+    for (int sel : {2, 20, 36}) {
+      c.select(sel);
+      const auto lines =
+          lines_of(c.panel("se3_sim teleop (/teleop)", size.first, size.second, footer));
+      EXPECT_LE(static_cast<int>(lines.size()), size.second) << size.first << "x" << size.second;
+      bool selected_shown = false;
+      for (const auto& l : lines) {
+        EXPECT_LT(static_cast<int>(l.size()), size.first) << "'" << l << "'";
+        char lead[16];
+        std::snprintf(lead, sizeof lead, "> %3d", sel + 1);
+        selected_shown = selected_shown || l.compare(0, 5, lead) == 0;
+      }
+      EXPECT_TRUE(selected_shown) << size.first << "x" << size.second << " joint " << sel + 1;
+    }
+  }
+  c.select(20);
+  const std::string s = c.panel("t", 80, 24, footer);
+  EXPECT_NE(s.find("more above"), std::string::npos) << s;
+  EXPECT_NE(s.find("more below"), std::string::npos) << s;
+  EXPECT_NE(s.find("+ or = raise"), std::string::npos) << s;  // 80 x 24 keeps the help
+  EXPECT_NE(s.find(footer), std::string::npos) << s;
+  // A terminal that reports no size is taken as 80 x 24.
+  EXPECT_EQ(c.panel("t", 0, 0, footer), s);
+  // Few joints on a big terminal: all of them, no markers.
+  Controller small(three_joints());
+  const std::string t = small.panel("t", 120, 50);
+  EXPECT_EQ(t.find("more"), std::string::npos) << t;
+  EXPECT_NE(t.find("  3  c"), std::string::npos) << t;
 }
 
 int main(int argc, char** argv) {

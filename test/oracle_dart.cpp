@@ -108,7 +108,7 @@ void compare(const std::string& label, const std::string& path, bool floating) {
   ASSERT_TRUE(skel) << "DART could not load " << path;
   ASSERT_EQ(static_cast<int>(skel->getNumDofs()), m.nv);
   skel->setGravity(m.gravity);
-  // Rigid-body dynamics only (DESIGN.md: damping and friction are the simulator's): DART adds
+  // Rigid-body dynamics only (docs/design.md: damping and friction are the simulator's): DART adds
   // joint damping and springs to its forward dynamics, and makes panda's second finger a mimic
   // joint; every joint becomes a plain force-driven joint here.
   for (std::size_t k = 0; k < skel->getNumDofs(); ++k) {

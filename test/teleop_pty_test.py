@@ -7,10 +7,13 @@ SIGINT/SIGTERM and after a crash signal. Also checks the clean exit without a te
 
 Started by test/teleop.test (rostest), which loads robot_description with the Panda URDF.
 """
+import fcntl
 import os
+import re
 import resource
 import select
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
@@ -30,7 +33,9 @@ MOUSE_ON = (b'\x1b[?1000h', b'\x1b[?1002h', b'\x1b[?1006h')
 MOUSE_OFF = (b'\x1b[?1000l', b'\x1b[?1002l', b'\x1b[?1006l')
 PANDA_ARM = ['panda_joint%d' % i for i in range(1, 8)]
 TIMEOUT = 3.0  # the node's ~timeout (dead-man) in these tests
-STEP = 2.0     # the node's ~step
+STEP = 0.1     # the node's ~step: a tenth of each joint's effort limit per key press
+LIMIT = dict(('panda_joint%d' % i, 87.0 if i <= 4 else 12.0) for i in range(1, 8))
+COLS, ROWS = 80, 24  # the pseudo-terminal's size
 
 
 def sgr(code, x, y, release=False):
@@ -57,6 +62,7 @@ class PtyNode:
 
     def __init__(self, extra_args=()):
         self.master, self.slave = os.openpty()
+        fcntl.ioctl(self.slave, termios.TIOCSWINSZ, struct.pack('HHHH', ROWS, COLS, 0, 0))
         self.original = termios.tcgetattr(self.slave)
         self.output = bytearray()
         self.lock = threading.Lock()
@@ -216,6 +222,26 @@ class TeleopOnPty(unittest.TestCase):
             self.assertIn(off, out, 'mouse mode not switched off: %r' % off)
             self.assertGreater(out.rfind(off), out.rfind(on))
 
+    def check_panel_fits(self, node):
+        """The last panel drawn fits the COLS x ROWS terminal: at most ROWS lines, none reaching
+        the last column (where it would wrap)."""
+        deadline = time.time() + 3.0
+        while time.time() < deadline:
+            out = node.text()
+            start = out.rfind(b'\x1b[H')
+            end = out.find(b'\x1b[J', start)
+            if start >= 0 and end > start:
+                break
+            time.sleep(0.05)
+        self.assertTrue(start >= 0 and end > start, 'no complete panel drawn')
+        text = re.sub(rb'\x1b\[[0-9;?]*[A-Za-z]', b'', out[start:end]).decode(errors='replace')
+        text = text.replace('\r', '')  # the terminal's output processing adds CR to LF
+        lines = text.split('\n')
+        self.assertLessEqual(len(lines), ROWS, text)
+        for line in lines:
+            self.assertLess(len(line), COLS, 'panel line too wide: %r' % line)
+        self.assertIn('panda_joint7', text)
+
     def test_keys_mouse_dead_man_and_quit(self):
         node, first = self.start()
         names = list(first.name)
@@ -224,23 +250,26 @@ class TeleopOnPty(unittest.TestCase):
         self.assertTrue(all(e == 0.0 for e in first.effort))
         j1, j2, j3, j5 = 'panda_joint1', 'panda_joint2', 'panda_joint3', 'panda_joint5'
 
-        # Keys: '2' selects the second joint; + raises, - lowers by ~step.
+        # Keys: '2' selects the second joint; + raises, - lowers by ~step times its limit.
         node.type(b'2+++')
-        self.expect({j2: 3 * STEP})
+        self.expect({j2: 3 * STEP * LIMIT[j2]})
         node.type(b'-----')
-        self.expect({j2: -2 * STEP})
-        # Clamping to the URDF effort limits: joint 5 has 12 N m, joint 3 87 N m.
-        node.type(b'5' + b'+' * 10)
-        self.expect({j2: -2 * STEP, j5: 12.0})
+        self.expect({j2: -2 * STEP * LIMIT[j2]})
+        # The step scales with the limit (12 N m: 1.2 per press); clamped to the limits.
+        node.type(b'5+')
+        self.expect({j2: -2 * STEP * LIMIT[j2], j5: 1.2})
+        node.type(b'+' * 10)
+        self.expect({j2: -2 * STEP * LIMIT[j2], j5: 12.0})
         node.type(b'3]]]' + b'-' * 8)  # step x8, then far below -87
-        self.expect({j2: -2 * STEP, j5: 12.0, j3: -87.0})
+        self.expect({j2: -2 * STEP * LIMIT[j2], j5: 12.0, j3: -87.0})
+        self.check_panel_fits(node)
         node.type(b' ')  # space zeroes all
         self.expect({})
         # Arrow keys split across writes: Down from joint 3 selects joint 4, Up goes back.
         node.type(b'\x1b[')
         node.type(b'B\x1bO')
         node.type(b'A[[[+')  # step back to ~step, + on joint 3
-        self.expect({j3: STEP})
+        self.expect({j3: STEP * LIMIT[j3]})
         node.type(b'\x7f')  # Backspace zeroes the selected joint
         self.expect({})
 
@@ -277,7 +306,7 @@ class TeleopOnPty(unittest.TestCase):
 
         # Quit: a last all-zero command, exit code 0, terminal as before.
         node.type(b'1++')
-        self.expect({j1: 2 * STEP})
+        self.expect({j1: 2 * STEP * LIMIT[j1]})
         node.type(b'q')
         self.assertEqual(node.wait_exit(), 0, node.errors())
         time.sleep(0.3)
@@ -288,7 +317,7 @@ class TeleopOnPty(unittest.TestCase):
         for sig in (signal.SIGTERM, signal.SIGINT):
             node, _ = self.start()
             node.type(b'+')
-            self.expect({PANDA_ARM[0]: STEP})
+            self.expect({PANDA_ARM[0]: STEP * LIMIT[PANDA_ARM[0]]})
             node.proc.send_signal(sig)
             self.assertEqual(node.wait_exit(), 0, node.errors())
             self.check_restored(node)

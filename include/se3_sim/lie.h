@@ -2,7 +2,7 @@
 // the adjoint actions Ad, Ad^-1, ad, ad* (eqs. 17-22), dexp and its inverse, spatial inertia
 // (eq. 23) and the Newton-Euler wrench (eq. 24).
 //
-// Conventions (DESIGN.md): a twist is V = [w; v] (angular first) in the body's own frame, a
+// Conventions (docs/design.md): a twist is V = [w; v] (angular first) in the body's own frame, a
 // wrench is F = [N; F] (torque first). A pose f = (R, p) maps body coordinates to the parent's.
 #pragma once
 

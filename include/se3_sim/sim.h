@@ -175,6 +175,14 @@ struct SimConfig {
   GuardOptions guard;
 };
 
+/// The state of one scene object (Simulator::objects()): free objects move, static ones stay.
+struct ObjectState {
+  std::string name;
+  bool is_static = true;
+  SE3 pose;                   ///< world pose of the object's frame (the shape's centre)
+  Vec6 twist = Vec6::Zero();  ///< body frame [w; v]; zero for static objects
+};
+
 /// One simulated system: model, state, stepper, commands and the divergence guard.
 class Simulator {
  public:
@@ -244,6 +252,21 @@ class Simulator {
   /// actuation of the last step) plus damping and friction.
   void applied_joint_efforts(VecX& out);
 
+  // ---- scene objects (scene_objects.h): each free object is a single-body free-floating
+  // system of its own (frame model().n + 1 + j for the j-th free one), stepped with the robot
+  /// Replaces the scene objects (resets them to their initial poses and twists). Throws
+  /// std::invalid_argument (nothing changed) for a free object with a non-positive mass or a
+  /// non-finite pose or twist.
+  void set_objects(const std::vector<SceneObject>& objects);
+  /// The objects as set, in the order given (static ones included).
+  const std::vector<SceneObject>& object_specs() const { return object_specs_; }
+  /// Every object's state after the last step, in the order of object_specs().
+  const std::vector<ObjectState>& objects() const { return objects_; }
+  /// Deepest contact penetration at the end of the last step (m, >= 0; 0 without contact).
+  double penetration() const { return penetration_; }
+  /// Deepest contact penetration at the end of any step since the last reset (m, >= 0).
+  double penetration_max() const { return penetration_max_; }
+
   // ---- stepping
   /// One step of dt. On divergence returns false, rolls the state back to the last good one
   /// and keeps the reason in failure() until reset().
@@ -308,8 +331,35 @@ class Simulator {
   /// The power of the joint damping and friction at the current state, W.
   double passive_power() const;
 
+  /// A free scene object as a system of its own: a single free body (Model n = 0).
+  struct ObjectBody {
+    int index = 0;  ///< into object_specs_ / objects_
+    std::unique_ptr<Model> model;
+    State initial;
+  };
+  void reset_objects();
+  /// The constraint system the step needs (the scene's, or an empty one for free objects).
+  void rebuild_constraints();
+  /// The contacts of the objects' collision model at the current state (collision_data_);
+  /// returns the deepest penetration (m, >= 0).
+  double collide_objects();
+
   std::unique_ptr<Model> model_;
   SimConfig config_;
+  std::vector<SceneObject> object_specs_;
+  std::vector<ObjectState> objects_;
+  std::vector<ObjectBody> bodies_;
+  std::vector<const Model*> body_models_;
+  std::vector<State> body_states_, body_last_good_;
+  std::vector<VecX> body_a_;
+  /// The objects (free and static) and the ground as a collision model (the robot's own
+  /// geometry is not in it yet: the contact spheres of the constraints stand for it).
+  std::unique_ptr<CollisionModel> collision_;
+  CollisionData collision_data_;
+  std::vector<SE3> frame_poses_;  ///< frames 0..n the robot's bodies, n + 1 + j free object j
+  bool contacts_fresh_ = false;   ///< collision_data_ is at the current state
+  ConstraintSpec spec_;           ///< as set_constraints got it
+  double penetration_ = 0, penetration_max_ = 0;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;
   std::unique_ptr<ConstraintSystem> constraints_start_;  ///< as set, to restart from on reset

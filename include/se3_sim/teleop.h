@@ -118,10 +118,12 @@ MouseEvent decode_mouse_code(int code, int x, int y, bool release);
 // ------------------------------------------------------------------------------ controller
 
 struct Params {
-  double step = 1.0;  ///< torque step of + and - (N m, or N for prismatic)
-  double min_step = 1e-3, max_step = 1e4;
-  double step_factor = 2.0;            ///< ] and * multiply the step by it, [ and / divide
-  double default_effort_limit = 10.0;  ///< limit of joints whose URDF effort is inf or <= 0
+  /// Torque step of + and - as a fraction of the selected joint's effort limit (0.05: 20
+  /// presses from zero to the limit; a 87 N m joint steps by 4.35 N m, a 12 N m one by 0.6).
+  double step = 0.05;
+  double min_step = 1e-4, max_step = 1.0;  ///< bounds of the fraction
+  double step_factor = 2.0;                ///< ] and * multiply the step by it, [ and / divide
+  double default_effort_limit = 10.0;      ///< limit of joints whose URDF effort is inf or <= 0
   double timeout = 1.0;            ///< dead-man (s): no input for this long zeroes all; <= 0 off
   double drag_columns = 40.0;      ///< a horizontal drag of this many columns = full limit
   double camera_yaw_step = 0.1;    ///< rad per a / d press
@@ -166,7 +168,10 @@ class Controller {
   const std::vector<JointInfo>& joints() const { return joints_; }
   const std::vector<double>& torques() const { return torques_; }
   int selected() const { return selected_; }  ///< 0-based index into joints()
+  /// The step as a fraction of the effort limit (the same for every joint).
   double step() const { return step_; }
+  /// The torque step of joint `index` (N m or N): step() times its effort limit.
+  double joint_step(int index) const;
   bool quit_requested() const { return quit_; }
   /// True after the dead-man zeroed the torques, until the next input.
   bool dead_man_tripped() const { return tripped_; }
@@ -185,8 +190,12 @@ class Controller {
   void scale_step(double factor);
 
   /// The help panel: title, keys, step and timeout, one line per joint with its torque,
-  /// limit and a bar; the selected joint is marked with '>'. Lines end with '\n'.
-  std::string panel(const std::string& title = "se3_sim teleop") const;
+  /// limit and a bar; the selected joint is marked with '>'. Lines end with '\n'. It fits a
+  /// terminal of `cols` x `rows` (no line longer than cols - 1, at most `rows` lines with the
+  /// footer's): the help shrinks first, then the joint list shows a window around the selected
+  /// joint with the number of joints above and below it.
+  std::string panel(const std::string& title = "se3_sim teleop", int cols = 80, int rows = 24,
+                    const std::string& footer = "") const;
 
  private:
   void handle_key(const KeyEvent& k);
@@ -196,7 +205,7 @@ class Controller {
   Params params_;
   std::vector<double> torques_;
   int selected_ = 0;
-  double step_ = 1.0;
+  double step_ = 0.05;  ///< fraction of the effort limit
   bool quit_ = false;
   bool tripped_ = false;
   bool any_input_ = false;

@@ -109,6 +109,11 @@ inline double from_bits(std::int64_t x) {
   std::memcpy(&r, &x, sizeof r);
   return r;
 }
+/// x shifted left by n bits as unsigned (a left shift into or past the sign bit of a signed
+/// integer is undefined).
+inline std::int64_t shift_left(std::int64_t x, int n) {
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(x) << n);
+}
 /// All ones where the lowest bit of x is set (an arithmetic shift of bit 63 through the lane).
 inline std::int64_t spread_sign(std::int64_t x) {
   return x >> 63;
@@ -121,6 +126,10 @@ inline v2i bits(v2d x) {
 }
 inline v2d from_bits(v2i x) {
   return (v2d)x;
+}
+typedef unsigned long long v2u __attribute__((vector_size(16)));
+inline v2i shift_left(v2i x, int n) {
+  return (v2i)((v2u)x << n);
 }
 inline v2i spread_sign(v2i x) {
 #if defined(__SSE2__)
@@ -164,8 +173,8 @@ __attribute__((always_inline)) inline void kernel(const Consts<D, I>& K, D x, D&
   const D cr = w + (cp - b * (sa + hb * ca));
   // 5. Quadrant: sin x = (S, C, -S, -C)[k & 3], cos x = (C, -S, -C, S)[k & 3].
   const I qk = bits(y);
-  const I neg = (qk << 62) & K.sign;  // bit 1 of k
-  const I odd = qk << 63;             // bit 0 of k
+  const I neg = shift_left(qk, 62) & K.sign;  // bit 1 of k
+  const I odd = shift_left(qk, 63);           // bit 0 of k
   const I swap = spread_sign(odd);
   const I sv = bits(sr) ^ (neg ^ odd);  // sin out for even k, cos out for odd k
   const I cv = bits(cr) ^ neg;          // cos out for even k, sin out for odd k

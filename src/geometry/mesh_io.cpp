@@ -426,10 +426,13 @@ std::shared_ptr<TriangleMesh> isolated(Make&& make, const MeshLimits& limits, st
     if (error) *error = "the mesh importer took more than " + std::to_string(limits.seconds) + " s";
     return nullptr;
   }
-  if (WIFSIGNALED(status)) {
+  if (WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) != 0 && b.empty())) {
     if (error) {
-      *error = "the mesh importer (assimp) crashed on it (signal " +
-               std::to_string(WTERMSIG(status)) + ")";
+      // A sanitizer in the child turns the signal into an exit status.
+      *error = "the mesh importer (assimp) crashed on it (" +
+               (WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status))
+                                    : "exit status " + std::to_string(WEXITSTATUS(status))) +
+               ")";
     }
     return nullptr;
   }

@@ -15,6 +15,7 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/model.h"
 #include "urdf_guard.h"
+#include "urdf_quirks.h"
 
 namespace se3 {
 namespace {
@@ -234,25 +235,31 @@ const urdf::Link& base_link(const urdf::ModelInterface& u, const urdf::Link& roo
 
 }  // namespace
 
-Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
+Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options) {
   check_urdf_text(xml);  // urdf_guard.h: size and nesting before tinyxml recurses
+  std::vector<std::string> quirks;
+  const std::string text = urdf_text_quirks(xml, quirks);  // urdf_quirks.h
   std::string err;
   std::vector<std::string> complaints;
-  urdf::ModelInterfaceSharedPtr u = parse_urdf(xml, err, &complaints);
+  urdf::ModelInterfaceSharedPtr u = parse_urdf(text, err, &complaints);
   if (!u) throw ModelError("URDF rejected by urdfdom: " + err);
   const UrdfRelease release(u);
   check_urdf_joints(*u);
   const urdf::LinkConstSharedPtr root = u->getRoot();
   if (!root) throw ModelError("URDF has no root link");
 
+  UrdfOptions opt = options;
+  urdf_model_quirks(*u, opt.locked, quirks);  // joints that move only massless links: locked
   Builder b{*u, opt, Model{}, {}};
   for (const auto& kv : opt.locked) b.locked.emplace(kv.first, kv.second);
+  b.m.warnings = quirks;
   Model& m = b.m;
   m.name = u->getName();
   m.floating = opt.floating;
-  m.start_with_base(root->name);
+  m.start_with_base(frame_name(root->name));
+  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
   const urdf::Link& start = base_link(*u, *root, m);
-  m.root_link = m.body_name[0] = start.name;
+  m.root_link = m.body_name[0] = frame_name(start.name);
   b.visit(start, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
   // or be massless (then its subtree check in validate() decides).
@@ -272,6 +279,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
   }
   m.finalize();
   m.validate();
+  group_quirk_warnings(m.warnings);
   return m;
 }
 

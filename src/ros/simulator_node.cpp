@@ -10,6 +10,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <atomic>
@@ -55,6 +56,57 @@ double finite_or_zero(double x) {
   return std::isfinite(x) ? x : 0.0;
 }
 
+bool file_exists(const std::string& path) {
+  std::ifstream in(path);
+  return static_cast<bool>(in);
+}
+
+// "gx gy gz", "[gx, gy, gz]" or "gx,gy,gz": three finite numbers.
+se3::Vec3 parse_vec3(std::string text, const std::string& name) {
+  for (char& c : text) {
+    if (c == '[' || c == ']' || c == ',') c = ' ';
+  }
+  std::istringstream in(text);
+  se3::Vec3 v;
+  std::string rest;
+  if (!(in >> v.x() >> v.y() >> v.z()) || (in >> rest) || !v.allFinite()) {
+    throw std::runtime_error(name + " needs three numbers, e.g. \"0 0 -9.81\" (got '" + text +
+                             "')");
+  }
+  return v;
+}
+
+// A YAML map of joint names to numbers ("{j1: 0.5, j2: -1}"); "" or "{}" for none.
+std::vector<std::pair<std::string, double>> joint_values(const std::string& text,
+                                                         const std::string& name) {
+  std::vector<std::pair<std::string, double>> out;
+  if (text.empty()) return out;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(name + ": " + e.what());
+  }
+  if (root.IsNull()) return out;
+  if (!root.IsMap()) {
+    throw std::runtime_error(name + " needs a map joint: value, e.g. \"{joint1: 0.5}\" (got '" +
+                             text + "')");
+  }
+  for (const auto& kv : root) {
+    const std::string joint = kv.first.as<std::string>();
+    double value = 0;
+    try {
+      value = kv.second.as<double>();
+    } catch (const YAML::Exception&) {
+      throw std::runtime_error(name + ": joint '" + joint + "' needs a number");
+    }
+    if (!std::isfinite(value))
+      throw std::runtime_error(name + ": joint '" + joint + "' is not finite");
+    out.emplace_back(joint, value);
+  }
+  return out;
+}
+
 // A step request slice holds the simulator at most this long before the node publishes and
 // serves again.
 constexpr double kSliceSeconds = 0.002;
@@ -71,6 +123,8 @@ class SimulatorNodeImpl {
  private:
   // ---- setup
   void configure();
+  std::string scene_file(const std::string& arg, bool robot_given) const;
+  void set_initial_positions(const std::vector<std::pair<std::string, double>>& values);
   void setup_controllers();
 
   // ---- commands
@@ -124,6 +178,7 @@ class SimulatorNodeImpl {
   JointTable joints_;
   TfTree tree_;
   std::string world_frame_ = "world";
+  std::string robot_source_;  ///< where the robot came from, for the log
   double rtf_ = 1.0, rate_ = 100.0, command_timeout_ = 0.5;
   double max_wrench_ = 1e4, max_effort_ = 1e4;
   bool use_sim_time_ = false;
@@ -160,24 +215,64 @@ class SimulatorNodeImpl {
 
 // ------------------------------------------------------------------ setup
 
+// The ~scene argument: "auto", a shipped scene's name (config/scenes/NAME.yaml, from ~scene_dir)
+// or a scene file; a relative path is taken from ~cwd (the directory roslaunch was started in).
+// "auto" is the generic scene when a robot comes from outside (robot:= or an already loaded
+// robot_description), else the satellite demo.
+std::string SimulatorNodeImpl::scene_file(const std::string& arg, bool robot_given) const {
+  const std::string dir = get_text(pnh_, "scene_dir").value_or("");
+  std::string name = arg;
+  if (name == "auto") name = robot_given ? "generic" : "satellite_arm";
+  if (name.find('/') == std::string::npos) {
+    std::string file = name;
+    if (file.size() < 5 || file.compare(file.size() - 5, 5, ".yaml") != 0) file += ".yaml";
+    if (!dir.empty() && file_exists(dir + "/" + file)) return dir + "/" + file;
+    if (file_exists(file)) return file;
+    throw std::runtime_error("scene '" + arg + "' is neither a scene of " +
+                             (dir.empty() ? std::string("config/scenes") : dir) +
+                             " (generic, satellite_arm, fixed_panda, ...) nor a file");
+  }
+  if (name[0] != '/') {
+    const std::string cwd = get_text(pnh_, "cwd").value_or("");
+    if (!cwd.empty()) return cwd + "/" + name;
+  }
+  return name;
+}
+
 void SimulatorNodeImpl::configure() {
-  const std::string scene_path = get_text(pnh_, "scene").value_or("");
-  if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
+  // The robot: robot_description (sim.launch's robot:= loads the file there; or loaded before
+  // by the user, e.g. xacro's output), else ~urdf_file, else the scene's robot.
   const std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
   std::string urdf_xml = get_text(nh_, "robot_description").value_or("");
   const bool had_description = !urdf_xml.empty();
   if (urdf_xml.empty() && !urdf_file.empty()) urdf_xml = read_file(urdf_file);
-  if (urdf_xml.empty() && scene_path.empty()) {
+  const std::string scene_arg = get_text(pnh_, "scene").value_or("");
+  const std::string scene_path = scene_arg.empty() ? "" : scene_file(scene_arg, !urdf_xml.empty());
+  if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
+  if (urdf_xml.empty() && scene_.robot_path.empty()) {
     throw std::runtime_error(
-        "no robot: set robot_description, ~urdf_file or ~scene (a scene YAML)");
+        "no robot: give robot:=FILE.urdf, load robot_description, or a scene that names a robot "
+        "(scene:=satellite_arm)" +
+        (scene_path.empty() ? std::string() : "; scene " + scene_path + " names none"));
   }
+  robot_source_ = !urdf_xml.empty()
+                      ? (had_description ? "robot_description" : "~urdf_file " + urdf_file)
+                      : "the scene's robot " + scene_.robot;
+  // The generic defaults (docs/design.md, "Launch files"): a scene that does not say `base:`
+  // has a fixed base, unless the URDF's root is free by a floating joint (the model reads
+  // that); floating:=true frees any base.
+  if (!scene_.base_given) scene_.floating = false;
   // Scene overrides: set and not "" (sim.launch always sets them, "" meaning the scene's).
   if (auto b = get_bool(pnh_, "floating")) scene_.floating = *b;
+  if (auto b = get_bool(pnh_, "joint_limits")) scene_.constraints.joint_limits = *b;
+  if (auto g = get_text(pnh_, "gravity")) scene_.gravity = parse_vec3(*g, "~gravity");
   if (auto s = get_text(pnh_, "integrator")) scene_.integrator = *s;
   if (auto x = get_double(pnh_, "dt")) scene_.dt = *x;
   if (auto x = get_double(pnh_, "tol")) scene_.tol = *x;
   if (auto x = get_double(pnh_, "real_time_factor")) scene_.real_time_factor = *x;
   if (auto x = get_double(pnh_, "publish_rate")) scene_.publish_rate = *x;
+  const auto initial =
+      joint_values(get_text(pnh_, "initial_positions").value_or(""), "~initial_positions");
   command_timeout_ = get_double(pnh_, "command_timeout").value_or(0.5);
   world_frame_ = get_text(pnh_, "world_frame").value_or("world");
   world_frame_ = se3::frame_name(world_frame_);  // tf2 frame names have no leading '/'
@@ -200,9 +295,15 @@ void SimulatorNodeImpl::configure() {
   sim_ = se3::make_simulator(scene_, urdf_xml);
   sim_->set_command_timeout(command_timeout_);
   model_ = &sim_->model();
+  const se3::Model& m = *model_;
+  for (const auto& w : m.warnings) ROS_WARN("simulator: %s", w.c_str());
+  set_initial_positions(initial);
+  if (m.floating && !m.links.empty() && m.links[0].name == world_frame_) {
+    throw std::runtime_error("the free base's root link is named '" + world_frame_ +
+                             "', as the world frame: give world_frame:=<another name>");
+  }
   rtf_ = scene_.real_time_factor;
   rate_ = scene_.publish_rate;
-  const se3::Model& m = *model_;
   if (!had_description) {
     // Others (renderer, teleop, robot_state_publisher) read the robot from robot_description.
     const se3::GeometryModel chain = se3::chain_geometry(m);  // chain:N has no file
@@ -215,13 +316,59 @@ void SimulatorNodeImpl::configure() {
   joints_ = joint_table(m, scene_.locked_joints);
   tree_ = tf_tree(m, world_frame_);
   setup_controllers();
+  const se3::Vec3 g = m.gravity;
   ROS_INFO(
-      "simulator: %s, %d joints (%s base), %s, dt %g s, real-time factor %g, publishing at %g "
-      "Hz%s",
-      scene_.name.empty() ? m.name.c_str() : scene_.name.c_str(), m.n,
-      m.floating ? "free" : "fixed", sim_->integrator().c_str(), sim_->dt(), rtf_, rate_,
+      "simulator: %s (%s), scene %s: %d joints, %s base, gravity [%g %g %g], joint limits %s, "
+      "%s, dt %g s, real-time factor %g, publishing at %g Hz%s",
+      m.name.c_str(), robot_source_.c_str(),
+      scene_.name.empty() ? scene_path.c_str() : scene_.name.c_str(), m.n,
+      m.floating ? "free" : "fixed", g.x(), g.y(), g.z(),
+      scene_.constraints.joint_limits ? "on" : "off",
+      sim_->constraints() && sim_->constraints()->has_unilateral()
+          ? "velocity-level time stepping (limits or contact)"
+          : sim_->integrator().c_str(),
+      sim_->dt(), rtf_, rate_,
       lockstep_ ? (", lockstep: " + std::to_string(lockstep_steps_) + " steps per command").c_str()
                 : "");
+}
+
+// ~initial_positions (a YAML map joint: value) over the scene's, then every joint inside its
+// limits when they are on (the zero configuration of a real URDF may lie outside them: such a
+// joint starts at its nearest limit, with one warning).
+void SimulatorNodeImpl::set_initial_positions(
+    const std::vector<std::pair<std::string, double>>& values) {
+  const se3::Model& m = *model_;
+  se3::State x = sim_->state();
+  for (const auto& kv : values) {
+    const int i = m.joint_index(kv.first);
+    if (i < 1) {
+      throw std::runtime_error("~initial_positions names joint '" + kv.first + "', which " +
+                               m.name + " does not move");
+    }
+    x.q[i - 1] = kv.second;
+  }
+  if (scene_.constraints.joint_limits) {
+    std::string clamped;
+    for (int i = 1; i <= m.n; ++i) {
+      const double q = std::clamp(x.q[i - 1], m.lower[i], m.upper[i]);
+      if (q != x.q[i - 1]) {
+        clamped += (clamped.empty() ? "" : ", ") + m.joint_name[i];
+        x.q[i - 1] = q;
+      }
+    }
+    if (!clamped.empty()) {
+      ROS_WARN(
+          "simulator: the initial position of %s lies outside its URDF limits: starts at the "
+          "nearest limit",
+          clamped.c_str());
+    }
+  }
+  if (!values.empty() || scene_.constraints.joint_limits) {
+    sim_->set_initial_state(x);
+    sim_->reset();
+    // Constraints anchor at (and project) the new initial state; controllers are set after.
+    if (!scene_.constraints.empty()) sim_->set_constraints(scene_.constraints);
+  }
 }
 
 // The scene's controllers, plus those named in ~controllers from the parameter server (under

@@ -9,7 +9,8 @@
 // on crash signals. Without a terminal on stdin it says so and exits with code 0.
 //
 // Private parameters: ~rate (Hz, 20), ~timeout (dead-man, s, 1.0; <= 0 disables it),
-// ~step (initial torque step, 1.0), ~default_effort_limit (10.0, for joints whose URDF
+// ~step (torque step per key press as a fraction of the joint's effort limit, 0.05),
+// ~default_effort_limit (10.0, for joints whose URDF
 // effort is missing, zero or infinite), ~drag_columns (40: columns of mouse drag for the
 // full effort limit), ~description_timeout (30 s to wait for a non-empty robot_description).
 #include "se3_sim/ros/teleop_node.h"
@@ -19,6 +20,7 @@
 #include <poll.h>
 #include <ros/ros.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -149,14 +151,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 /// The panel as one frame: cursor home, each line cleared to its end, the rest of the screen
-/// cleared.
-std::string frame(const std::string& panel, const std::string& status) {
+/// cleared. The last line gets no newline, which would scroll a panel as tall as the terminal.
+std::string frame(std::string panel) {
+  while (!panel.empty() && panel.back() == '\n') panel.pop_back();
   std::string f = "\x1b[H";
-  for (char c : panel + status) {
+  for (char c : panel) {
     if (c == '\n') f += "\x1b[K";
     f += c;
   }
-  f += "\x1b[J";
+  f += "\x1b[K\x1b[J";
   return f;
 }
 
@@ -192,8 +195,13 @@ int run_node(int argc, char** argv) {
     ROS_ERROR("teleop: ~rate must be positive (got %g)", rate);
     return 1;
   }
-  if (!(params.step > 0) || !(params.default_effort_limit > 0) || !(params.drag_columns > 0)) {
-    ROS_ERROR("teleop: ~step, ~default_effort_limit and ~drag_columns must be positive");
+  if (!(params.step > 0 && params.step <= 1)) {
+    ROS_ERROR("teleop: ~step is a fraction of each joint's effort limit, in (0, 1] (got %g)",
+              params.step);
+    return 1;
+  }
+  if (!(params.default_effort_limit > 0) || !(params.drag_columns > 0)) {
+    ROS_ERROR("teleop: ~default_effort_limit and ~drag_columns must be positive");
     return 1;
   }
 
@@ -301,12 +309,15 @@ int run_node(int argc, char** argv) {
       if (next_tick <= now) next_tick = now + period;  // fell behind: do not burst
     }
     if (tick || !events.empty()) {
-      char status[160];
-      std::snprintf(status, sizeof status,
-                    "\npublishing %s at %g Hz (%u subscribers), camera on %s\n",
-                    torque_pub.getTopic().c_str(), rate, torque_pub.getNumSubscribers(),
+      char status[200];
+      const unsigned subs = torque_pub.getNumSubscribers();
+      std::snprintf(status, sizeof status, "-> %s at %g Hz (%u subscriber%s), camera %s",
+                    torque_pub.getTopic().c_str(), rate, subs, subs == 1 ? "" : "s",
                     camera_pub.getTopic().c_str());
-      const std::string f = frame(ctl.panel(title), status);
+      // The panel fits the terminal as it is now (80 x 24 when it does not say).
+      struct winsize ws = {};
+      if (ioctl(g_out_fd, TIOCGWINSZ, &ws) != 0) ws = {};
+      const std::string f = frame(ctl.panel(title, ws.ws_col, ws.ws_row, status));
       if (f != shown && g_raw) {
         write_all(g_out_fd, f.data(), f.size());
         shown = f;

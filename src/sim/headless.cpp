@@ -116,7 +116,9 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   Simulator sim(std::move(model), x0, cfg);
-  if (!scene.constraints.empty()) sim.set_constraints(scene_constraints(scene, sim.model()));
+  const ConstraintSpec spec = scene_constraints(scene, sim.model());
+  if (!spec.empty()) sim.set_constraints(spec);
+  if (!scene.objects.empty()) sim.set_objects(scene.objects);
   if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;

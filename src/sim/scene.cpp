@@ -300,6 +300,14 @@ Scene load_scene(const std::string& path) {
 
 Model scene_model(const Scene& scene, const std::string& urdf_xml) {
   Model m;
+  if (urdf_xml.empty() && scene.robot_path.empty() && !scene.objects.empty()) {
+    // Objects and no robot: an empty robot (a fixed base without mass or joints, nv = 0).
+    m.floating = false;
+    m.start_with_base("world");
+    m.gravity = scene.gravity;
+    m.finalize();
+    return m;
+  }
   if (urdf_xml.empty() && scene.robot_path.empty()) {
     throw SceneError((scene.file.empty() ? std::string("the scene") : scene.file) +
                      ": no robot: the scene has no 'robot:' and none was given (a URDF, e.g. "
@@ -312,6 +320,9 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
     m = make_chain(std::atoi(scene.robot_path.c_str() + 6), scene.floating, scene.chain_masses,
                    scene.chain_length);
   } else {
+    if (urdf_xml.empty() && scene.robot_path.empty()) {
+      throw SceneError(scene.file + ": the scene names no robot and none was given");
+    }
     UrdfOptions opt;
     opt.floating = scene.floating;
     opt.locked = scene.locked_joints;

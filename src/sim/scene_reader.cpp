@@ -278,9 +278,11 @@ class TextLimits {
         return;
       }
       if (node_start && (c == '&' || c == '!')) {  // an anchor or tag before the node
-        // It ends at a blank or a flow indicator (neither may be in its name).
+        // It ends at a blank or a flow indicator (neither may be in its name), or before a
+        // ':' that ends the line or meets a blank (yaml-cpp then reads a mapping key there).
         while (k + 1 < e && s_[k + 1] != ' ' && s_[k + 1] != '\t' && s_[k + 1] != '[' &&
-               s_[k + 1] != ']' && s_[k + 1] != '{' && s_[k + 1] != '}' && s_[k + 1] != ',') {
+               s_[k + 1] != ']' && s_[k + 1] != '{' && s_[k + 1] != '}' && s_[k + 1] != ',' &&
+               !(s_[k + 1] == ':' && (k + 2 >= e || s_[k + 2] == ' ' || s_[k + 2] == '\t'))) {
           ++k;
         }
         continue;

@@ -63,9 +63,14 @@ void Controller::set_torque(int index, double tau) {
   torques_[index] = std::clamp(tau, -lim, lim);
 }
 
+double Controller::joint_step(int index) const {
+  if (index < 0 || index >= static_cast<int>(joints_.size())) return 0.0;
+  return step_ * joints_[index].limit;
+}
+
 void Controller::nudge(double steps) {
   if (joints_.empty()) return;
-  double tau = torques_[selected_] + steps * step_;
+  double tau = torques_[selected_] + steps * joint_step(selected_);
   // Keep sums of steps free of rounding dust (0.1 + 0.2 shows as 0.3).
   tau = std::round(tau * 1e9) / 1e9;
   set_torque(selected_, tau);
@@ -271,47 +276,104 @@ std::string bar(double tau, double limit, int half) {
   return "[" + s + "]";
 }
 
+/// Appends `line` cut to `width` characters, and a newline.
+void add_line(std::string& out, const std::string& line, int width) {
+  out.append(line, 0, static_cast<std::size_t>(std::max(0, width)));
+  out += '\n';
+}
+
 }  // namespace
 
-std::string Controller::panel(const std::string& title) const {
-  std::string p;
-  p += title + ": " + std::to_string(joints_.size()) + " joints   step " + fmt("%g", step_);
+std::string Controller::panel(const std::string& title, int cols, int rows,
+                              const std::string& footer) const {
+  // A terminal that reports no size (0) is taken as 80 x 24; below 20 x 8 nothing fits well.
+  cols = cols > 0 ? std::max(cols, 20) : 80;
+  rows = rows > 0 ? std::max(rows, 8) : 24;
+  const int width = cols - 1;  // a full-width line would wrap on some terminals
+
+  std::string head = title + "  " + std::to_string(joints_.size()) + " joints  ";
   if (params_.timeout > 0)
-    p += fmt("   dead-man %g s", params_.timeout);
+    head += fmt("dead-man %g s", params_.timeout);
   else
-    p += "   dead-man off";
+    head += "dead-man off";
   if (!any_input_)
-    p += "   [waiting for input]";
+    head += "  [waiting for input]";
   else if (tripped_)
-    p += "   [IDLE: no input, torques zero]";
+    head += "  [IDLE: no input, torques zero]";
   else
-    p += "   [ACTIVE]";
-  p += "\n";
-  p += "keys:   1-9,0 select joint 1-10   Tab/Down/Right next   Shift-Tab/Up/Left previous\n";
-  p += "        + or = raise, - lower by one step   Backspace zero joint   space zero all\n";
-  p += "        ] or * step x" + fmt("%g", params_.step_factor) + "   [ or / step /" +
-       fmt("%g", params_.step_factor) + "   q or Ctrl-C quit\n";
-  p += "mouse:  left drag: torque = limit * columns / " + fmt("%g", params_.drag_columns) +
-       "   left click: zero joint   wheel: select\n";
-  p += "        middle click: zero all\n";
-  p += "camera: a/d yaw   w/s pitch   z/x zoom in/out   right-button drag orbits\n";
-  p += "\n";
-  p += "    #  joint                    torque (N m or N)       limit\n";
-  for (std::size_t i = 0; i < joints_.size(); ++i) {
-    const auto& j = joints_[i];
-    std::string name = j.name.size() > 28 ? j.name.substr(0, 25) + "..." : j.name;
-    name.resize(28, ' ');
-    char head[32];
-    std::snprintf(head, sizeof head, "%c %3zu  ", static_cast<int>(i) == selected_ ? '>' : ' ',
-                  i + 1);
-    p += head + name + fmt(" %+11.3f %11.3f", torques_[i], j.limit) + (j.from_urdf ? " " : "*") +
-         " " + bar(torques_[i], j.limit, 10) + "\n";
-  }
+    head += "  [ACTIVE]";
+
+  // Help, most needed first; lines are dropped from the end when the terminal is short.
+  const std::string f = fmt("%g", params_.step_factor);
+  const std::vector<std::string> help = {
+      "keys   1-9,0 joint  Tab/arrows next/previous  + or = raise  - lower  q quit",
+      "       Backspace zero joint  space zero all  ] or * step x" + f + "  [ or / step /" + f,
+      "mouse  left drag: torque = limit x columns/" + fmt("%g", params_.drag_columns) +
+          "  click: zero  middle: zero all",
+      "camera a/d yaw  w/s pitch  z/x zoom  right drag orbits  wheel: select joint",
+  };
   bool any_default = false;
   for (const auto& j : joints_) any_default = any_default || !j.from_urdf;
-  if (any_default)
-    p += fmt("  * no effort limit in the URDF: default limit %g used\n",
-             params_.default_effort_limit);
+  const std::string note = any_default ? fmt("* no effort limit in the URDF: default limit %g used",
+                                             params_.default_effort_limit)
+                                       : std::string();
+
+  std::vector<std::string> footer_lines;
+  for (std::size_t a = 0; a < footer.size();) {
+    const std::size_t b = footer.find('\n', a);
+    footer_lines.push_back(footer.substr(a, b == std::string::npos ? b : b - a));
+    if (b == std::string::npos) break;
+    a = b + 1;
+  }
+  if (!footer_lines.empty() && footer_lines.back().empty()) footer_lines.pop_back();
+
+  // Rows: head, help, blank, table header, joints (with "more" markers), note, footer.
+  const int n = static_cast<int>(joints_.size());
+  const int fixed = 1 + 1 + (note.empty() ? 0 : 1) + static_cast<int>(footer_lines.size());
+  // All joints if they fit beside some help; else a window, with the two key lines kept when
+  // the terminal has room for a useful window beside them.
+  const int all_help = static_cast<int>(help.size()) + 1;  // with the blank line after it
+  int help_rows = std::min(all_help, std::max(0, rows - fixed - n));
+  if (help_rows < 2 && rows - fixed >= 12) help_rows = 2;
+  const int joint_rows = std::max(3, rows - fixed - help_rows);
+  int first = 0, last = n;  // the joints shown: [first, last)
+  if (n > joint_rows) {
+    const int shown = std::max(1, joint_rows - 2);  // two rows for "N more" markers
+    first = std::clamp(selected_ - shown / 2, 0, n - shown);
+    last = first + shown;
+  }
+
+  // Joint line: "> 12  name  +torque  limit* [bar]"; the name and the bar share what is left.
+  constexpr int kNumbers = 7 + 1 + 11 + 1 + 10 + 2;  // marker+index, torque, limit, '*', spaces
+  const int rest = width - kNumbers;
+  const int name_w = std::clamp(rest / 2, 8, 28);
+  const int half = std::clamp((rest - name_w - 3) / 2, 0, 12);
+
+  std::string p;
+  add_line(p, head, width);
+  for (int k = 0; k < help_rows; ++k) {
+    add_line(p, k < static_cast<int>(help.size()) ? help[k] : std::string(), width);
+  }
+  std::string th = "    #  joint";
+  th.resize(7 + name_w, ' ');
+  add_line(p, th + "      torque      limit  step " + fmt("%g", step_ * 100) + " % of limit",
+           width);
+  if (first > 0) add_line(p, fmt("       ... %g more above", first), width);
+  for (int i = first; i < last; ++i) {
+    const auto& j = joints_[i];
+    std::string name =
+        static_cast<int>(j.name.size()) > name_w ? j.name.substr(0, name_w - 3) + "..." : j.name;
+    name.resize(name_w, ' ');
+    char lead[32];
+    std::snprintf(lead, sizeof lead, "%c %3d  ", i == selected_ ? '>' : ' ', i + 1);
+    std::string line =
+        lead + name + fmt(" %+11.3f %10.3f", torques_[i], j.limit) + (j.from_urdf ? " " : "*");
+    if (half > 0) line += " " + bar(torques_[i], j.limit, half);
+    add_line(p, line, width);
+  }
+  if (last < n) add_line(p, fmt("       ... %g more below", n - last), width);
+  if (!note.empty()) add_line(p, note, width);
+  for (const auto& l : footer_lines) add_line(p, l, width);
   return p;
 }
 
