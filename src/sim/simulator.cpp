@@ -537,7 +537,7 @@ bool Simulator::step() {
   StepInfo info;
   if (constraints_) {
     ContactBodies cb;
-    if (!bodies_.empty()) {
+    if (!bodies_.empty() || scene_collision_) {
       for (size_t j = 0; j < bodies_.size(); ++j) {
         free_body_acceleration(*bodies_[j].model, body_states_[j], body_a_[j]);
       }
@@ -546,7 +546,7 @@ bool Simulator::step() {
       cb.states = &body_states_;
       cb.a_free = &body_a_;
       cb.contacts = &collision_data_.contacts;
-      cb.objects = &collision_->objects();
+      cb.objects = &collider()->objects();
     }
     info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
   } else {
