@@ -265,6 +265,29 @@ TEST(Contact, MeshRobotStandsOnItsMeshFeet) {
   EXPECT_LT(sim->kinetic_energy(), 1e-3);
 }
 
+// A contact scene that names another integrator (rkmk4) keeps that integrator's steps while no
+// limit or contact is within reach (bit for bit the same states as without the ground), and
+// takes the steps with contact by the contact scheme (counted as velocity steps).
+TEST(Contact, AnotherIntegratorKeepsItsStepsAwayFromContact) {
+  Scene with = load_scene(kScenes + "quadruped_ground.yaml");
+  with.integrator = "rkmk4";
+  with.controllers.clear();
+  Scene without = with;
+  without.constraints.ground = false;
+  without.constraints.contacts.clear();
+  auto a = make_simulator(with);
+  auto b = make_simulator(without);
+  ASSERT_EQ(a->integrator(), "rkmk4");
+  ASSERT_EQ(a->step_n(100), 100) << a->failure();  // falling: the feet 0.15 m above the ground
+  ASSERT_EQ(b->step_n(100), 100) << b->failure();
+  EXPECT_EQ(a->state().q, b->state().q);
+  EXPECT_EQ(a->state().v, b->state().v);
+  EXPECT_EQ(a->constraints()->report().velocity_steps, 0u);
+  ASSERT_EQ(a->step_n(400), 400) << a->failure();
+  EXPECT_GT(a->constraints()->report().velocity_steps, 100u);
+  EXPECT_LT(a->penetration_max(), 5e-3);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
