@@ -175,6 +175,8 @@ struct SimConfig {
   GuardOptions guard;
 };
 
+struct SceneCollision;  // scene_collision.h
+
 /// The state of one scene object (Simulator::objects()): free objects move, static ones stay.
 struct ObjectState {
   std::string name;
@@ -188,6 +190,7 @@ class Simulator {
  public:
   /// Throws std::invalid_argument for an unknown integrator or a bad dt.
   Simulator(Model model, const State& initial, const SimConfig& config);
+  ~Simulator();
 
   const Model& model() const { return *model_; }
   const State& state() const { return state_; }
@@ -258,8 +261,18 @@ class Simulator {
   /// std::invalid_argument (nothing changed) for a free object with a non-positive mass or a
   /// non-finite pose or twist.
   void set_objects(const std::vector<SceneObject>& objects);
+  /// Contact from the collision layer for the whole scene (scene_collision.h: the robot's
+  /// collision shapes, its contact spheres, the objects, the ground; its frames are this
+  /// simulator's: bodies 0..n, free object j at n + 1 + j). Replaces the sim's own model of
+  /// the objects and the constraint system's own contact spheres (which the scene collision
+  /// holds). Call after set_objects and set_constraints; resets.
+  void set_scene_collision(SceneCollision&& collision);
   /// The objects as set, in the order given (static ones included).
   const std::vector<SceneObject>& object_specs() const { return object_specs_; }
+  /// The contacts of the last step's end (the collision layer's; empty without objects or a
+  /// scene collision), their objects in contact_objects().
+  const std::vector<Contact>& contacts() const;
+  const std::vector<CollisionObject>* contact_objects() const;
   /// Every object's state after the last step, in the order of object_specs().
   const std::vector<ObjectState>& objects() const { return objects_; }
   /// Deepest contact penetration at the end of the last step (m, >= 0; 0 without contact).
@@ -355,6 +368,9 @@ class Simulator {
   /// The objects (free and static) and the ground as a collision model (the robot's own
   /// geometry is not in it yet: the contact spheres of the constraints stand for it).
   std::unique_ptr<CollisionModel> collision_;
+  std::unique_ptr<SceneCollision> scene_collision_;  ///< set_scene_collision's (replaces it)
+  CollisionModel* collider() const;
+  std::vector<SE3> free_poses_;
   CollisionData collision_data_;
   std::vector<SE3> frame_poses_;  ///< frames 0..n the robot's bodies, n + 1 + j free object j
   bool contacts_fresh_ = false;   ///< collision_data_ is at the current state
@@ -397,7 +413,14 @@ class Simulator {
 void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
                            const Vec6& wrench, VecX& tau);
 
-/// Builds a simulator for a scene (urdf_xml as in scene_model).
+/// Whether a scene's contact comes from the collision layer (scene_collision.h): it has
+/// objects, self_collision, or ground: {from_collisions: true} (the robot's own collision
+/// shapes, meshes included, on the ground). Otherwise contact is the `contacts:` spheres on the
+/// ground plane of the constraint system.
+bool uses_scene_collision(const Scene& scene);
+/// Builds a simulator for a scene (urdf_xml as in scene_model): the model, its constraints
+/// (joint limits on unless the scene turns them off), objects, the scene collision (when
+/// uses_scene_collision) and controllers.
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml = "");
 
 // ------------------------------------------------------------------ `se3_dyn simulate`

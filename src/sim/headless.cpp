@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "se3_sim/limits.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -119,6 +120,11 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   const ConstraintSpec spec = scene_constraints(scene, sim.model());
   if (!spec.empty()) sim.set_constraints(spec);
   if (!scene.objects.empty()) sim.set_objects(scene.objects);
+  if (uses_scene_collision(scene)) {
+    const GeometryModel none;
+    sim.set_scene_collision(
+        scene_collision(scene, &sim.model(), scene.robot_path.empty() ? &none : nullptr));
+  }
   if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -80,6 +81,40 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
     if (model_->friction[i] != 0) rubbing_.push_back({model_->idx_v(i), model_->friction[i]});
   }
   set_initial_state(initial);
+  reset();
+}
+
+Simulator::~Simulator() = default;
+
+CollisionModel* Simulator::collider() const {
+  return scene_collision_ ? &scene_collision_->model : collision_.get();
+}
+
+const std::vector<Contact>& Simulator::contacts() const {
+  return collision_data_.contacts;
+}
+
+const std::vector<CollisionObject>* Simulator::contact_objects() const {
+  const CollisionModel* c = collider();
+  return c ? &c->objects() : nullptr;
+}
+
+void Simulator::set_scene_collision(SceneCollision&& collision) {
+  if (collision.robot_bodies != model_->n + 1 ||
+      collision.free_objects != static_cast<int>(bodies_.size())) {
+    throw std::invalid_argument(
+        "scene collision frames do not match the simulator's robot and "
+        "free objects");
+  }
+  scene_collision_ = std::make_unique<SceneCollision>(std::move(collision));
+  // The contact spheres are in the scene collision now: the constraint system keeps the
+  // ground only as the reason for velocity-level steps.
+  spec_.contacts.clear();
+  spec_.contacts_from_collisions = false;
+  frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
+  free_poses_.assign(bodies_.size(), SE3());
+  collision_data_.contacts.reserve(256);
+  rebuild_constraints();
   reset();
 }
 
@@ -307,6 +342,7 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   }
   object_specs_ = objects;
   bodies_ = std::move(bodies);
+  scene_collision_.reset();  // its frames were for the objects before
   body_models_.clear();
   body_states_.clear();
   body_a_.clear();
@@ -380,11 +416,18 @@ void Simulator::reset_objects() {
 }
 
 double Simulator::collide_objects() {
-  if (!collision_) return 0;
-  for (size_t j = 0; j < bodies_.size(); ++j) {
-    frame_poses_[model_->n + 1 + j] = body_states_[j].base;
+  CollisionModel* cm = collider();
+  if (!cm) return 0;
+  if (scene_collision_) {
+    forward_kinematics(*model_, diag_, state_.base, state_.q);
+    for (size_t j = 0; j < bodies_.size(); ++j) free_poses_[j] = body_states_[j].base;
+    scene_frame_poses(diag_.oMb, free_poses_, frame_poses_);
+  } else {
+    for (size_t j = 0; j < bodies_.size(); ++j) {
+      frame_poses_[model_->n + 1 + j] = body_states_[j].base;
+    }
   }
-  collide(*collision_, collision_data_, frame_poses_);
+  collide(*cm, collision_data_, frame_poses_);
   double deepest = 0;
   for (const Contact& c : collision_data_.contacts) deepest = std::max(deepest, c.depth);
   contacts_fresh_ = true;
@@ -394,10 +437,13 @@ double Simulator::collide_objects() {
 void Simulator::rebuild_constraints() {
   constraints_.reset();
   constraints_start_.reset();
-  if (spec_.empty() && bodies_.empty()) return;
+  if (spec_.empty() && bodies_.empty() && !scene_collision_) return;
   constraints_ = std::make_unique<ConstraintSystem>(*model_, spec_);
   if (!bodies_.empty()) {
     constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
+  }
+  if (scene_collision_) {
+    constraints_->set_free_bodies(body_models_, 64 + static_cast<int>(16 * bodies_.size()));
   }
   constraints_->anchor(initial_);
   State x = initial_;
@@ -491,7 +537,7 @@ bool Simulator::step() {
   StepInfo info;
   if (constraints_) {
     ContactBodies cb;
-    if (!bodies_.empty()) {
+    if (!bodies_.empty() || scene_collision_) {
       for (size_t j = 0; j < bodies_.size(); ++j) {
         free_body_acceleration(*bodies_[j].model, body_states_[j], body_a_[j]);
       }
@@ -500,7 +546,7 @@ bool Simulator::step() {
       cb.states = &body_states_;
       cb.a_free = &body_a_;
       cb.contacts = &collision_data_.contacts;
-      cb.objects = &collision_->objects();
+      cb.objects = &collider()->objects();
     }
     info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
   } else {
@@ -516,7 +562,7 @@ bool Simulator::step() {
   }
   if (constraints_) {
     penetration_ = constraints_->report().penetration;
-    if (!bodies_.empty()) {
+    if (!bodies_.empty() || scene_collision_) {
       penetration_ = std::max(penetration_, collide_objects());
       for (size_t j = 0; j < bodies_.size(); ++j) {
         ObjectState& o = objects_[bodies_[j].index];
@@ -633,6 +679,11 @@ void Simulator::link_poses(std::vector<SE3>& out) {
   }
 }
 
+bool uses_scene_collision(const Scene& scene) {
+  return !scene.objects.empty() || scene.self_collision ||
+         scene.constraints.contacts_from_collisions;
+}
+
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml) {
   Model m = scene_model(scene, urdf_xml);
   const State x = scene_state(scene, m);
@@ -645,6 +696,12 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
   if (!spec.empty()) sim->set_constraints(spec);
   if (!scene.objects.empty()) sim->set_objects(scene.objects);
+  if (uses_scene_collision(scene)) {
+    const GeometryModel none;
+    const bool robot = !(urdf_xml.empty() && scene.robot_path.empty());
+    sim->set_scene_collision(
+        scene_collision(scene, &sim->model(), robot ? nullptr : &none, urdf_xml));
+  }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;
 }
