@@ -316,16 +316,13 @@ void SimulatorNodeImpl::configure() {
   joints_ = joint_table(m, scene_.locked_joints);
   tree_ = tf_tree(m, world_frame_);
   setup_controllers();
-  // The scene's objects (free and static): stepped with the robot, on /tf (a frame each, parent
-  // the world) and on sim_markers (namespace objects).
-  if (!scene_.objects.empty()) {
-    for (const se3::SceneObject& o : scene_.objects) {
-      if (m.link_index(o.name) >= 0 || o.name == world_frame_) {
-        throw std::runtime_error("scene object '" + o.name +
-                                 "' has the name of a robot link or of the world frame");
-      }
+  // The scene's objects (free and static; make_simulator set them and their contact): on /tf
+  // (a frame each, parent the world) and on sim_markers (namespace objects).
+  for (const se3::SceneObject& o : scene_.objects) {
+    if (m.link_index(o.name) >= 0 || o.name == world_frame_) {
+      throw std::runtime_error("scene object '" + o.name +
+                               "' has the name of a robot link or of the world frame");
     }
-    sim_->set_objects(scene_.objects);
   }
   const se3::Vec3 g = m.gravity;
   ROS_INFO(
