@@ -11,6 +11,7 @@
 #include <new>
 #include <random>
 
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "test_util.h"
 
@@ -222,6 +223,51 @@ TEST(Alloc, RomeoFloating) {
                       model_from_urdf_file(se3_test::robot_path("romeo_small.urdf"), opt));
 }
 
+// collide() against the ground (hulls, boxes, cylinders, spheres: the half-space tests of the
+// collision layer) and through FCL's broad phase allocates nothing after its first call. (Pairs
+// FCL's narrow phase tests do allocate: its GJK makes its shape objects with new on every
+// query, about 5 allocations per pair; docs/collision.md.)
+TEST(Alloc, CollideOnTheGround) {
+  const Scene s =
+      load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/quadruped_ground.yaml");
+  const Model m = scene_model(s);
+  SceneCollision sc = scene_collision(s, &m);
+  State x = scene_state(s, m);
+  Data d(m);
+  x.base.p.z() = 0.23;  // the feet and shins in the ground
+  forward_kinematics(m, d, x.base, x.q);
+  std::vector<SE3> frames;
+  scene_frame_poses(d.oMb, {}, frames);
+  CollisionData cd;
+  collide(sc.model, cd, frames);
+  EXPECT_GE(cd.contacts.size(), 8u);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 20; ++k) collide(sc.model, cd, frames);
+            }),
+            0);
+  // Objects on the ground, apart from each other (only the broad phase sees their pairs).
+  Scene o = parse_scene(
+      "ground: true\nobjects:\n  - {name: a, shape: {box: [0.2, 0.2, 0.2]}, mass: 1}\n"
+      "  - {name: b, shape: {cylinder: [0.1, 0.2]}, mass: 1}\n"
+      "  - {name: c, shape: {sphere: 0.1}, mass: 1}\n",
+      ".", "o.yaml");
+  SceneCollision oc = scene_collision(o, nullptr);
+  std::vector<SE3> poses = {SE3(Mat3::Identity(), Vec3(0, 0, 0.099)),
+                            SE3(Mat3::Identity(), Vec3(1, 0, 0.099)),
+                            SE3(Mat3::Identity(), Vec3(2, 0, 0.099))};
+  scene_frame_poses({}, poses, frames);
+  collide(oc.model, cd, frames);
+  EXPECT_EQ(cd.contacts.size(), 9u);  // 4 + 4 + 1
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 20; ++k) {
+                poses[0].p.x() = 0.001 * k;
+                scene_frame_poses({}, poses, frames);
+                collide(oc.model, cd, frames);
+              }
+            }),
+            0);
+}
+
 // A whole Simulator step (stepper, passive forces, divergence guard with its energy checks,
 // last-good copies) allocates nothing, for every registered integrator.
 TEST(Alloc, SimulatorSteps) {
@@ -303,4 +349,79 @@ wrist: {type: effort_controllers/JointEffortController, joint: panda_joint7}
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// Constraint and contact steps (constraints.h through integrate.h's constrained_step) allocate
+// nothing after the first, counting malloc as well as operator new: the four-bar loop (rkmk4
+// with eq. (32) in every stage, projection), the pinned chain, Solo12 on the ground (the
+// velocity level, PGS and the active-set solver), and free objects on the ground in a
+// Simulator (rows from outside contacts, free bodies). Collision detection is not in these
+// steps (the ground contacts are the sim layer's own).
+TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
+  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  for (const char* name : {"fourbar", "pinned_chain", "quadruped_ground"}) {
+    for (ContactSolver solver : {ContactSolver::PGS, ContactSolver::ActiveSet}) {
+      SCOPED_TRACE(std::string(name) + (solver == ContactSolver::PGS ? " pgs" : " active_set"));
+      Scene sc = load_scene(scenes + name + ".yaml");
+      sc.constraints.options.solver = solver;
+      const Model m = scene_model(sc);
+      ConstraintSystem cs(m, scene_constraints(sc, m));
+      State x = scene_state(sc, m);
+      cs.anchor(x);
+      auto stepper = make_stepper(sc.integrator, m);
+      const VecX tau = VecX::Zero(m.nv);
+      for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt).ok);
+      EXPECT_EQ(allocations_of([&] {
+                  for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt);
+                }),
+                0);
+    }
+  }
+  // Free bodies with contacts from outside (the collision layer's list; collide() itself, FCL's,
+  // is not counted here): a robot on the ground plus two boxes, one resting on the ground at its
+  // four corners, one on it.
+  const Scene sc = load_scene(scenes + "quadruped_ground.yaml");
+  const Model m = scene_model(sc);
+  ConstraintSystem cs(m, scene_constraints(sc, m));
+  std::vector<Model> boxes(2);
+  std::vector<const Model*> models;
+  for (Model& b : boxes) {
+    b.floating = true;
+    b.start_with_base("box", Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity()));
+    b.finalize();
+    models.push_back(&b);
+  }
+  cs.set_free_bodies(models, 16);
+  std::vector<State> states = {State(boxes[0]), State(boxes[1])};
+  states[0].base.p = Vec3(2, 0, 0.1);
+  states[1].base.p = Vec3(2, 0, 0.3);
+  std::vector<VecX> a_free(2, VecX::Zero(6));
+  for (VecX& a : a_free) a[5] = -9.81;
+  std::vector<CollisionObject> objects(3);
+  objects[0].frame = m.n + 1;
+  objects[1].frame = m.n + 2;
+  objects[2].frame = CollisionObject::kWorld;  // the ground
+  std::vector<Contact> contacts;
+  for (int k = 0; k < 8; ++k) {
+    Contact c;
+    c.a = k < 4 ? 2 : 0;
+    c.b = k < 4 ? 0 : 1;
+    c.point = Vec3(2 + ((k & 1) ? 0.1 : -0.1), (k & 2) ? 0.1 : -0.1, k < 4 ? 0.0 : 0.2);
+    contacts.push_back(c);
+  }
+  ContactBodies cb;
+  cb.models = &models;
+  cb.states = &states;
+  cb.a_free = &a_free;
+  cb.contacts = &contacts;
+  cb.objects = &objects;
+  State x = scene_state(sc, m);
+  auto stepper = make_stepper(sc.integrator, m);
+  const VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt, cb).ok);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt, cb);
+            }),
+            0);
+  EXPECT_LT(states[1].v.norm(), 1e-3);  // the contacts held the boxes
 }

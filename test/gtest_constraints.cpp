@@ -17,24 +17,6 @@
 
 using namespace se3;
 
-// Counts heap allocations (this test binary only) for the no-allocation check.
-static std::atomic<long> g_allocations{0};
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-// operator new above takes its memory from malloc, so free is the matching release.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#pragma GCC diagnostic pop
-
 namespace {
 
 #ifdef SE3_SIM_SOURCE_DIR
@@ -413,21 +395,7 @@ TEST(Contact, Solo12WithFreeJointsFallsAndComesToRest) {
   EXPECT_GT(sim->state().base.p.z(), 0.0);
 }
 
-TEST(Constraints, StepsAllocateNothingAfterTheFirst) {
-  for (const char* name : {"fourbar", "pinned_chain", "quadruped_ground"}) {
-    const Scene sc = load_scene(path(std::string("config/scenes/") + name + ".yaml"));
-    const Model m = scene_model(sc);
-    ConstraintSystem cs(m, sc.constraints);
-    State x = scene_state(sc, m);
-    cs.anchor(x);
-    auto stepper = make_stepper(sc.integrator, m);
-    const VecX tau = VecX::Zero(m.nv);
-    for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt).ok);
-    const long before = g_allocations.load();
-    for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt);
-    EXPECT_EQ(g_allocations.load() - before, 0) << name;
-  }
-}
+// Constraint and contact steps allocate nothing after the first: gtest_alloc.cpp (malloc too).
 
 TEST(Constraints, SceneErrorsNameTheProblem) {
   EXPECT_THROW(

@@ -28,7 +28,11 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/limits.h", "model"},
     {"se3_sim/geometry.h", "geometry"},
     {"se3_sim/dynamics.h", "dynamics"},
-    {"se3_sim/constraints.h", "dynamics"},
+    {"se3_sim/constraints.h", "solver"},
+    {"se3_sim/constraint.h", "constraint"},
+    {"se3_sim/solver.h", "solver"},
+    {"se3_sim/collision.h", "collision"},
+    {"se3_sim/scene_objects.h", "sim"},
     {"se3_sim/integrate.h", "integrate"},
     {"se3_sim/render.h", "render"},
     {"se3_sim/render/camera.h", "render"},
@@ -36,6 +40,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/teleop.h", "teleop"},
     {"se3_sim/sim.h", "sim"},
     {"se3_sim/controllers.h", "sim"},
+    {"se3_sim/scene_collision.h", "sim"},
     {"se3_sim/ros/convert.h", "ros"},
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},
@@ -49,12 +54,19 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"model", {"lie", "model"}},
     {"geometry", {"lie", "model", "geometry"}},
     {"dynamics", {"lie", "model", "geometry", "dynamics"}},
-    {"integrate", {"lie", "model", "geometry", "dynamics", "integrate"}},
+    {"collision", {"lie", "model", "geometry", "dynamics", "collision"}},
+    {"constraint", {"lie", "model", "geometry", "dynamics", "collision", "constraint"}},
+    {"solver", {"lie", "model", "geometry", "dynamics", "collision", "constraint", "solver"}},
+    {"integrate",
+     {"lie", "model", "geometry", "dynamics", "collision", "constraint", "solver", "integrate"}},
     {"render", {"lie", "model", "geometry", "dynamics", "render"}},
     {"teleop", {"lie", "model", "teleop"}},
-    {"sim", {"lie", "model", "geometry", "dynamics", "integrate", "sim"}},
+    {"sim",
+     {"lie", "model", "geometry", "dynamics", "collision", "constraint", "solver", "integrate",
+      "sim"}},
     {"ros",
-     {"lie", "model", "geometry", "dynamics", "integrate", "sim", "render", "teleop", "ros"}},
+     {"lie", "model", "geometry", "dynamics", "collision", "constraint", "solver", "integrate",
+      "sim", "render", "teleop", "ros"}},
 };
 
 // The files of a layer: its public headers and src/<layer>/.
@@ -65,6 +77,7 @@ std::vector<fs::path> layer_files(const fs::path& root, const std::string& layer
       files.push_back(root / "include" / hl.first);
     }
   }
+  if (!fs::exists(root / "src" / layer)) return files;  // a layer of headers alone (so far)
   for (const auto& e : fs::recursive_directory_iterator(root / "src" / layer)) {
     const std::string ext = e.path().extension().string();
     if (ext == ".cpp" || ext == ".h") files.push_back(e.path());

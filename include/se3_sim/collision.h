@@ -14,6 +14,7 @@
 // when self-collision is off, and static-static pairs.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -64,6 +65,21 @@ struct Contact {
 
 class CollisionModel;
 
+/// The convex hull of a mesh (vertices times a per-axis scale), with its mass properties as a
+/// uniform solid of density 1: what a mesh collision shape is in this layer.
+struct ConvexHull {
+  std::vector<Vec3> vertices;                 ///< hull vertices, shape frame (scaled)
+  std::vector<std::array<int, 3>> triangles;  ///< counter-clockwise seen from outside
+  double volume = 0;                          ///< m^3
+  Vec3 centroid = Vec3::Zero();               ///< shape frame
+  Mat3 inertia = Mat3::Zero();                ///< about the centroid, per unit density
+};
+
+/// The hull by qhull (libqhull_r). Throws std::invalid_argument naming `name` for fewer than 4
+/// vertices or a flat (degenerate) mesh.
+ConvexHull convex_hull(const TriangleMesh& mesh, const Vec3& scale = Vec3::Ones(),
+                       const std::string& name = "mesh");
+
 /// Per-step workspace: the contacts of the last collide() (capacity kept between steps).
 struct CollisionData {
   std::vector<Contact> contacts;
@@ -84,6 +100,8 @@ class CollisionModel {
   const CollisionOptions& options() const { return options_; }
   /// Whether objects i and j may ever collide (the filter).
   bool may_collide(int i, int j) const;
+  /// The convex hull object i collides as (meshes), or null.
+  const ConvexHull* hull(int i) const;
 
   struct Impl;
   const Impl& impl() const { return *impl_; }

@@ -28,18 +28,19 @@
 // dq = -D^-1 Psi^T (Psi D^-1 Psi^T)^+ phi, the base moved by f exp(dq_0), then velocities
 // w -= D^-1 Psi^T (Psi D^-1 Psi^T)^+ Psi w, the smallest change of kinetic energy).
 //
-// Unilateral constraints (joint limits lambda >= 0, ground contact lambda_n >= 0 with Coulomb
-// friction |lambda_t| <= mu lambda_n) are solved at the velocity level by time stepping
-// (Moreau/Stewart-Trinkle): over a step h the free velocity w* = w + h a_free receives impulses
-// p, w+ = w* + D^-1 J^T p, chosen by projected Gauss-Seidel on the Delassus matrix
-// W = J D^-1 J^T so that every row meets its law (bilateral: J w+ = b; limit and normal:
-// J w+ >= b, p >= 0, complementary; friction: the tangential impulse of a contact in the disc of
-// radius mu p_n, opposing slip); then the pose moves with w+ (symplectic Euler on SE(3)).
-// Restitution is 0. b holds the position correction: a gap g > 0 may close within the step
-// (b = -g / h, no tunnelling), a penetration deeper than `slop` is pushed out at the rate
-// erp (g + slop) / h. Forces are p / h. A scene with limits or contact steps this way whatever
-// its integrator; a scene with only bilateral constraints uses its integrator with the
-// multipliers of (32) inside every stage.
+// Unilateral constraints (joint limits lambda >= 0, contact lambda_n >= 0 with Coulomb friction
+// |lambda_t| <= mu lambda_n) are solved at the velocity level by time stepping (Moreau /
+// Stewart-Trinkle): over a step h the free velocity w* = w + h a_free receives impulses p,
+// w+ = w* + D^-1 J^T p. The rows (bilateral, limits, contact normal and friction) are built into
+// one ConstraintRows (constraint.h) by its builders, over one point Jacobian; the impulses come
+// from solver.h (projected Gauss-Seidel, or the active-set method: ConstraintOptions::solver).
+// Beside the robot the step may carry free bodies (scene objects, each a single-body free model:
+// v = [v_robot; v_obj1; ...], D^-1 block-diagonal: minv for the robot, the constant 6x6 inverse
+// inertia in the body frame for each object) and contacts from outside (the collision layer's
+// Contact list). The position update is the integrate layer's (contact_semi_implicit,
+// integrate.h): velocity_step changes velocities only, finish_velocity_step reports and projects
+// after the positions have moved. Forces are p / h. A scene with only bilateral constraints uses
+// its integrator with the multipliers of (32) inside every stage.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -49,8 +50,10 @@
 #include <string>
 #include <vector>
 
+#include "se3_sim/constraint.h"
 #include "se3_sim/dynamics.h"
 #include "se3_sim/geometry.h"
+#include "se3_sim/solver.h"
 
 namespace se3 {
 
@@ -94,7 +97,10 @@ struct ConstraintOptions {
   double erp = 0.2;        ///< fraction of a penetration (beyond slop) removed per step
   double slop = 1e-4;      ///< m or rad of penetration left alone (resting contact)
   double margin = 0.01;    ///< m or rad: rows of gaps below this (plus |rate| h) enter the solve
-  double bilateral_erp = 0.2;  ///< velocity-level bilateral rows: b = -bilateral_erp phi / h
+  double bilateral_erp = 0.2;         ///< velocity-level bilateral rows: b = -bilateral_erp phi / h
+  double restitution = 0;             ///< of the ground and the contact spheres (the larger counts)
+  double restitution_velocity = 0.2;  ///< m/s: slower impacts do not bounce
+  ContactSolver solver = ContactSolver::PGS;  ///< pgs or active_set (solver.h)
 };
 
 /// What a scene asks for. Link names are resolved against the model by ConstraintSystem.
@@ -114,6 +120,8 @@ struct ConstraintSpec {
   ConstraintOptions options;
 
   bool empty() const { return bilateral.empty() && !joint_limits && !ground; }
+  /// Whether joint_limits was written in the scene (else the scene's default applies).
+  bool joint_limits_given = false;
 };
 
 /// One constraint force for display and messages (world frame).
@@ -141,11 +149,22 @@ struct ConstraintReport {
   int rank = 0;                       ///< numerical rank of the last bilateral solve
   std::uint64_t singular_solves = 0;  ///< solves that needed the pseudo-inverse (cumulative)
   std::uint64_t solves = 0;           ///< all multiplier solves (cumulative)
-  int pgs_iterations = 0;             ///< last PGS run
+  int pgs_iterations = 0;             ///< last solver run (PGS sweeps or active-set updates)
+  std::uint64_t velocity_steps = 0;   ///< steps taken at the velocity level (cumulative)
   double pgs_change = 0;              ///< last PGS sweep's largest impulse change
   double bilateral_error = 0;         ///< max |phi| of the bilateral rows after the step
   double penetration = 0;             ///< deepest contact penetration (m, >= 0)
   double limit_violation = 0;         ///< largest excursion beyond a joint limit (>= 0)
+};
+
+/// What a velocity step works on beside the robot: the free bodies' states and free
+/// accelerations (as set_free_bodies), and contacts from outside (collision layer) with the
+/// objects they index. Any pointer may be null.
+struct ConstraintStepInput {
+  std::vector<State>* bodies = nullptr;
+  const std::vector<VecX>* body_a_free = nullptr;
+  const std::vector<Contact>* contacts = nullptr;
+  const std::vector<CollisionObject>* objects = nullptr;
 };
 
 /// The constraints of one model with their workspace (sized once; a step allocates nothing
@@ -181,10 +200,26 @@ class ConstraintSystem final : public AccelerationHook {
   /// this system as its acceleration hook: projection (or, without it, the error), the report,
   /// and the forces of the last stage's multipliers at the end-of-step configuration.
   void finish_bilateral_step(State& x);
-  /// With limits or contact: one velocity-level time step of h (see the header comment) from the
-  /// free acceleration a_free (ABA with the passive forces, no hook). Returns false when the
-  /// solve produced a non-finite state.
-  bool velocity_step(State& x, const VecX& a_free, double h);
+  /// Free bodies stepped with the robot at the velocity level (scene objects): each a single
+  /// free body (Model n = 0, floating; not owned, must outlive the system). Frame numbering of
+  /// contacts from outside: frames 0..n the robot's bodies, n + 1 + j free body j.
+  /// max_external_contacts: room for contacts from outside (StepInput::contacts; the deepest
+  /// first when there are more).
+  void set_free_bodies(const std::vector<const Model*>& bodies, int max_external_contacts = 0);
+  int free_bodies() const { return static_cast<int>(free_.size()); }
+  using StepInput = ConstraintStepInput;
+  /// Whether a velocity step of h from x would have any unilateral row (a limit or contact
+  /// within reach), from the free acceleration a_free and the given extra input.
+  bool unilateral_within_reach(const State& x, const VecX& a_free, double h,
+                               const StepInput& in = {});
+  /// With limits or contact: the velocities of one velocity-level time step of h (see the
+  /// header comment) from the free acceleration a_free (ABA with the passive forces, no hook):
+  /// x.v (and the free bodies' v) become w+. Positions are the integrator's (integrate.h's
+  /// contact step); then finish_velocity_step. Returns false for a non-finite solve.
+  bool velocity_step(State& x, const VecX& a_free, double h, const StepInput& in = {});
+  /// After the positions have moved with w+: the projection of the bilateral rows, and the
+  /// report's errors (penetration of the internal contact spheres, limit excursion).
+  void finish_velocity_step(State& x);
 
   /// Largest constraint error at x: bilateral |phi| (m or rad), penetration (m) and limit
   /// excursion (rad or m), whichever is largest.
@@ -207,26 +242,34 @@ class ConstraintSystem final : public AccelerationHook {
     std::vector<Vec3> dirs;  ///< row directions (point), or the two normals of axis_w (axis)
     int row0 = 0;
   };
-  enum RowKind { kBil, kLimLower, kLimUpper, kNormal, kTangent1, kTangent2 };
+  struct FreeBody {
+    const Model* model = nullptr;
+    Mat6 Minv = Mat6::Zero();  ///< inverse spatial inertia (body frame, constant)
+    std::vector<SE3> pose;     ///< its one body pose, for the Jacobian
+    SystemKinematics kin;
+  };
 
-  /// Forward kinematics, world axes Sw_ and (with v) the body twists and bias accelerations.
+  void bind();
+  /// Forward kinematics, world axes and (with v) the body twists and bias accelerations.
   void kinematics(const SE3& base, const VecX& q, const VecX* v);
   /// phi_, Psi_ and (with_bias, after kinematics with v) gamma_ = Psi_dot w.
   void fill_bilateral(bool with_bias);
   Vec3 point_world(const PointRef& p) const;
-  /// M(row, :) += s d^T J_p: the velocity of the body point p along the world direction d.
-  void add_point_row(const PointRef& p, const Vec3& d, double s, MatX& M, int row) const;
-  /// M(row, :) += s c^T J_w: the body's world angular velocity along c.
-  void add_angular_row(int body, const Vec3& c, double s, MatX& M, int row) const;
   /// Psi_dot w of a body point (world frame), from Vb_ and Ab_.
   Vec3 point_accel_bias(const PointRef& p) const;
-  /// Solves Wb_ out = rhs by LDLT, or by the pseudo-inverse when Wb_ is rank deficient.
+  /// Solves Wb_ out = rhs (solver.h's solve_equality) and counts it in the report.
   void solve_multipliers(const VecX& rhs, VecX& out);
   void assemble_bilateral_forces(const VecX& lam, double scale);
+  /// The rows of a velocity step at the kinematics of x (vfree_ and the bodies' set).
+  void build_rows(const State& x, double h, const StepInput& in);
+  /// The internal contacts (contact spheres against the ground) at the current kinematics.
+  void ground_contacts();
 
   const Model& model_;
   ConstraintSpec spec_;
   ConstraintOptions opt_;
+  RowParams params_;
+  SolverOptions solver_opt_;
   std::vector<Bil> bil_;
   std::vector<PointRef> contacts_;  ///< sphere centres
   std::vector<double> contact_radius_;
@@ -234,23 +277,34 @@ class ConstraintSystem final : public AccelerationHook {
   std::vector<int> limit_force_index_;  ///< joints with a limit, in forces_ order
   int nb_ = 0;
   int max_rows_ = 0;
+  int nv_total_ = 0;
   double alpha_ = 0, beta2_ = 0;
 
   Data data_;
-  std::vector<Vec6> Sw_;  ///< world-frame axis of every velocity coordinate
+  SystemKinematics kin_;  ///< the robot's, over data_.oMb
   std::vector<Vec6> Vb_;  ///< body twists (body frame)
   std::vector<Vec6> Ab_;  ///< velocity-product accelerations (body frame, wdot = 0)
+  std::vector<FreeBody> free_;
+  std::vector<const SystemKinematics*> systems_;  ///< robot, then the free bodies
+  std::vector<FrameRef> frames_;                  ///< collision frame -> (system, body)
+
+  // internal contacts: sphere k against the ground, as collision-layer contacts
+  std::vector<Contact> ground_contacts_;
+  std::vector<CollisionObject> ground_objects_;  ///< spheres 0..nc-1, then the ground
+  std::vector<int> ground_contact_sphere_;       ///< per ground contact: its sphere
+  std::vector<Contact> one_contact_;             ///< one contact at a time for its rows
 
   // bilateral (nb rows)
-  MatX Psi_, Yb_, Wb_;
+  ConstraintRows::RowMat Psi_;
+  MatX Yb_, Wb_;
   VecX phi_, gamma_, rhs_, lambda_, mult_, a_, dq_, vfree_;
-  Eigen::LDLT<MatX> ldlt_;
-  Eigen::SelfAdjointEigenSolver<MatX> eig_;
+  SolverWorkspace ws_;
   // velocity level (up to max_rows_)
-  MatX J_, Y_, W_;
-  VecX b_, c_, p_;
-  std::vector<int> row_kind_, row_ref_;
-  std::vector<Vec3> warm_contact_;  ///< last impulses (n, t1, t2) per contact point
+  ConstraintRows rows_;
+  int internal_rows_end_ = 0;  ///< rows before it: bilateral, limits, internal contacts
+  MatX Y_, W_;
+  VecX c_, p_;
+  std::vector<Vec3> warm_contact_;  ///< last impulses (n, t1, t2) per contact sphere
   std::vector<double> warm_lower_, warm_upper_, contact_gap_;
   VecX warm_bil_;
   std::vector<ConstraintForce> forces_;

@@ -98,6 +98,9 @@ class Stepper {
   /// Order of accuracy (global error O(h^order)).
   virtual int order() const = 0;
   virtual bool adaptive() const { return false; }
+  /// Whether this is the semi-implicit Euler scheme (contact_semi_implicit, semi_implicit_euler)
+  /// whose velocity update and position update the contact step takes apart.
+  virtual bool contact_scheme() const { return false; }
   /// Advances x by exactly h under tau_cmd (size nv). An adaptive stepper covers h with as many
   /// internal steps as its tolerance needs and remembers the internal step size across calls.
   /// On failure (ok == false) x is left as it was.
@@ -178,14 +181,50 @@ ButcherTableau tableau_dormand_prince45();
 std::unique_ptr<Stepper> make_rkmk_stepper(const ButcherTableau& tableau, const Model& model,
                                            const StepperOptions& opt);
 
-class ConstraintSystem;  // constraints.h (dynamics layer)
+class ConstraintSystem;  // constraints.h (constraint layer)
+struct Contact;          // collision.h
+struct CollisionObject;  // collision.h
 
-/// One step of h under the constraints (constraints.h). With only bilateral constraints the
-/// stepper integrates with the multipliers of eq. (32) in every stage (the system is its
-/// acceleration hook for the step) and the system then projects the state and records the
-/// forces; with joint limits or contact the system takes a velocity-level time step from the
-/// free acceleration (ABA with the passive forces). On failure the result says why.
+/// The registered name of the contact scheme (semi-implicit Euler with velocity-level impulses).
+inline constexpr const char* kContactStepper = "contact_semi_implicit";
+/// Whether a stepper name is the contact scheme, or semi_implicit_euler (the same scheme
+/// without constraints, kept as a contact scene's integrator for older scenes).
+bool is_contact_scheme(const std::string& name);
+/// The position half of the semi-implicit Euler step on SE(3) with x.v as it stands:
+/// f <- f exp(h V0) (kept orthonormal), q <- q + h qdot.
+void advance_positions_semi_implicit(const Model& model, State& x, double h);
+
+/// A free body of a contact step (a scene object: Model n = 0, floating, its frame at its centre
+/// of mass). Its free velocity over h is taken in the frame of the step's start, where without
+/// torque the body-frame momentum does not change: V* = V + h [0; R^T g] (a = [0; R^T g]).
+void free_body_acceleration(const Model& body, const State& x, VecX& a);
+/// After the impulses: R <- R E, E = exp(h w), p <- p + h R v, and the twist re-expressed in the
+/// new frame (v <- E^T v, w <- I^-1 E^T I w), so that in flight the world momentum m R v and
+/// angular momentum R I w stay exactly what they were (free objects keep their momentum
+/// between impacts; the body-frame semi-implicit Euler step would not).
+void advance_free_body(const Model& body, State& x, double h);
+
+/// The free bodies of a contact step beside the robot (scene objects) and contacts from
+/// outside; any pointer may be null (no bodies, no outside contacts).
+struct ContactBodies {
+  const std::vector<const Model*>* models = nullptr;  ///< single free bodies (n = 0)
+  std::vector<State>* states = nullptr;
+  const std::vector<VecX>* a_free = nullptr;  ///< free_body_acceleration of each, this step
+  const std::vector<Contact>* contacts = nullptr;
+  const std::vector<CollisionObject>* objects = nullptr;
+};
+
+/// One step of h under the constraints (constraints.h). With only bilateral constraints (and no
+/// bodies) the stepper integrates with the multipliers of eq. (32) in every stage (the system
+/// is its acceleration hook for the step) and the system then projects the state and records
+/// the forces. With joint limits, contact or free bodies the step is the contact scheme: the
+/// free velocity from ABA (with the passive forces), the impulses (ConstraintSystem::
+/// velocity_step), the positions with the new velocities (advance_positions_semi_implicit),
+/// then ConstraintSystem::finish_velocity_step. A stepper other than the contact scheme
+/// (is_contact_scheme) keeps its own steps while no limit or contact is within reach: the
+/// steps that have one are the contact scheme's (first order), documented in docs/contact.md.
+/// On failure the result says why.
 StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State& x,
-                          const VecX& tau_cmd, double h);
+                          const VecX& tau_cmd, double h, const ContactBodies& bodies = {});
 
 }  // namespace se3

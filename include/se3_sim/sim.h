@@ -14,6 +14,7 @@
 #include "se3_sim/controllers.h"
 #include "se3_sim/integrate.h"
 #include "se3_sim/limits.h"
+#include "se3_sim/scene_objects.h"
 
 namespace se3 {
 
@@ -44,6 +45,10 @@ struct SceneError : std::runtime_error {
 ///       src/sim/contact_scene.cpp (read into Scene::constraints)
 ///   controllers: {NAME: {type: effort_controllers/..., joints: [...], pid: {...}}, ...}
 ///       ros_control-style controllers (controllers.h), every one listed runs at every step
+///   objects: [{name, shape, mass, inertia, pose, twist, mu, restitution, color}, ...]
+///       rigid bodies beside the robot (scene_objects.h); a scene may have objects and no robot
+///   srdf: robot.srdf                self_collision: false
+///   contact: {margin: 0.01, max_contacts_per_pair: 4}    (the collision layer's options)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -77,6 +82,12 @@ struct Scene {
   std::vector<double> chain_masses = {1.0};
   ConstraintSpec constraints;  ///< bilateral constraints, limits, ground contact (empty: none)
   std::vector<ControllerSpec> controllers;  ///< run inside the simulator (empty: none)
+  /// `objects:` (scene_objects.h, src/sim/scene_objects.cpp), in file order.
+  std::vector<SceneObject> objects;
+  std::string srdf;               ///< `srdf:` resolved against the scene's folder ("": none)
+  bool self_collision = false;    ///< `self_collision:` robot links against each other
+  double contact_margin = 0.01;   ///< `contact: {margin}` m: gaps reported as contacts
+  int max_contacts_per_pair = 4;  ///< `contact: {max_contacts_per_pair}`
 };
 
 /// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.
@@ -164,11 +175,22 @@ struct SimConfig {
   GuardOptions guard;
 };
 
+struct SceneCollision;  // scene_collision.h
+
+/// The state of one scene object (Simulator::objects()): free objects move, static ones stay.
+struct ObjectState {
+  std::string name;
+  bool is_static = true;
+  SE3 pose;                   ///< world pose of the object's frame (the shape's centre)
+  Vec6 twist = Vec6::Zero();  ///< body frame [w; v]; zero for static objects
+};
+
 /// One simulated system: model, state, stepper, commands and the divergence guard.
 class Simulator {
  public:
   /// Throws std::invalid_argument for an unknown integrator or a bad dt.
   Simulator(Model model, const State& initial, const SimConfig& config);
+  ~Simulator();
 
   const Model& model() const { return *model_; }
   const State& state() const { return state_; }
@@ -232,6 +254,31 @@ class Simulator {
   /// Joint efforts acting at the current state (size n): the command (a controlled joint: its
   /// actuation of the last step) plus damping and friction.
   void applied_joint_efforts(VecX& out);
+
+  // ---- scene objects (scene_objects.h): each free object is a single-body free-floating
+  // system of its own (frame model().n + 1 + j for the j-th free one), stepped with the robot
+  /// Replaces the scene objects (resets them to their initial poses and twists). Throws
+  /// std::invalid_argument (nothing changed) for a free object with a non-positive mass or a
+  /// non-finite pose or twist.
+  void set_objects(const std::vector<SceneObject>& objects);
+  /// Contact from the collision layer for the whole scene (scene_collision.h: the robot's
+  /// collision shapes, its contact spheres, the objects, the ground; its frames are this
+  /// simulator's: bodies 0..n, free object j at n + 1 + j). Replaces the sim's own model of
+  /// the objects and the constraint system's own contact spheres (which the scene collision
+  /// holds). Call after set_objects and set_constraints; resets.
+  void set_scene_collision(SceneCollision&& collision);
+  /// The objects as set, in the order given (static ones included).
+  const std::vector<SceneObject>& object_specs() const { return object_specs_; }
+  /// The contacts of the last step's end (the collision layer's; empty without objects or a
+  /// scene collision), their objects in contact_objects().
+  const std::vector<Contact>& contacts() const;
+  const std::vector<CollisionObject>* contact_objects() const;
+  /// Every object's state after the last step, in the order of object_specs().
+  const std::vector<ObjectState>& objects() const { return objects_; }
+  /// Deepest contact penetration at the end of the last step (m, >= 0; 0 without contact).
+  double penetration() const { return penetration_; }
+  /// Deepest contact penetration at the end of any step since the last reset (m, >= 0).
+  double penetration_max() const { return penetration_max_; }
 
   // ---- stepping
   /// One step of dt. On divergence returns false, rolls the state back to the last good one
@@ -297,8 +344,38 @@ class Simulator {
   /// The power of the joint damping and friction at the current state, W.
   double passive_power() const;
 
+  /// A free scene object as a system of its own: a single free body (Model n = 0).
+  struct ObjectBody {
+    int index = 0;  ///< into object_specs_ / objects_
+    std::unique_ptr<Model> model;
+    State initial;
+  };
+  void reset_objects();
+  /// The constraint system the step needs (the scene's, or an empty one for free objects).
+  void rebuild_constraints();
+  /// The contacts of the objects' collision model at the current state (collision_data_);
+  /// returns the deepest penetration (m, >= 0).
+  double collide_objects();
+
   std::unique_ptr<Model> model_;
   SimConfig config_;
+  std::vector<SceneObject> object_specs_;
+  std::vector<ObjectState> objects_;
+  std::vector<ObjectBody> bodies_;
+  std::vector<const Model*> body_models_;
+  std::vector<State> body_states_, body_last_good_;
+  std::vector<VecX> body_a_;
+  /// The objects (free and static) and the ground as a collision model (the robot's own
+  /// geometry is not in it yet: the contact spheres of the constraints stand for it).
+  std::unique_ptr<CollisionModel> collision_;
+  std::unique_ptr<SceneCollision> scene_collision_;  ///< set_scene_collision's (replaces it)
+  CollisionModel* collider() const;
+  std::vector<SE3> free_poses_;
+  CollisionData collision_data_;
+  std::vector<SE3> frame_poses_;  ///< frames 0..n the robot's bodies, n + 1 + j free object j
+  bool contacts_fresh_ = false;   ///< collision_data_ is at the current state
+  ConstraintSpec spec_;           ///< as set_constraints got it
+  double penetration_ = 0, penetration_max_ = 0;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;
   std::unique_ptr<ConstraintSystem> constraints_start_;  ///< as set, to restart from on reset
@@ -336,7 +413,14 @@ class Simulator {
 void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
                            const Vec6& wrench, VecX& tau);
 
-/// Builds a simulator for a scene (urdf_xml as in scene_model).
+/// Whether a scene's contact comes from the collision layer (scene_collision.h): it has
+/// objects, self_collision, or ground: {from_collisions: true} (the robot's own collision
+/// shapes, meshes included, on the ground). Otherwise contact is the `contacts:` spheres on the
+/// ground plane of the constraint system.
+bool uses_scene_collision(const Scene& scene);
+/// Builds a simulator for a scene (urdf_xml as in scene_model): the model, its constraints
+/// (joint limits on unless the scene turns them off), objects, the scene collision (when
+/// uses_scene_collision) and controllers.
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml = "");
 
 // ------------------------------------------------------------------ `se3_dyn simulate`
@@ -383,6 +467,17 @@ struct SimulateResult {
   /// The run was stopped at SimulateOptions::max_body_steps (adaptive internal steps).
   bool stopped = false;
   std::string status;  ///< why the run ended early ("" when it completed)
+  /// Scenes with objects: every object's final state (Scene::objects order), for the JSON's
+  /// "objects" key (twist in the object's frame).
+  struct FinalObject {
+    std::string name;
+    SE3 pose;
+    Vec6 twist = Vec6::Zero();
+  };
+  std::vector<FinalObject> objects;
+  /// Deepest contact penetration over the run (m), Simulator::penetration_max(); NaN (null) for
+  /// a scene without contact (no objects, no ground, no contact points).
+  double penetration_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Runs a scene or model headless with zero commanded torques (a model and a scene together: the
@@ -390,8 +485,10 @@ struct SimulateResult {
 /// bad input, and on a run beyond limits::kMaxSteps or kMaxBodySteps (refused before anything is
 /// built or stepped); a divergence ends the run early with diverged = true.
 SimulateResult simulate_headless(const SimulateOptions& options);
-/// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null), and
-/// "diverged" (true/false) and "status" (why the run ended early, or null).
+/// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null),
+/// "penetration_max", "objects" (scenes with objects: {"NAME": {"position": [x,y,z],
+/// "orientation": [x,y,z,w], "twist": [wx,wy,wz,vx,vy,vz]}}), and "diverged" (true/false) and
+/// "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);
 
 }  // namespace se3

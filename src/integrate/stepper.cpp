@@ -119,6 +119,7 @@ class SemiImplicitEulerStepper final : public Stepper {
   using Stepper::Stepper;
   std::string name() const override { return "semi_implicit_euler"; }
   int order() const override { return 1; }
+  bool contact_scheme() const override { return true; }
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
     const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
     const int nq = model_.nq, nv = model_.nv;
@@ -157,6 +158,10 @@ struct Registry {
         "symplectic only for a constant mass matrix)",
         factory_of<SemiImplicitEulerStepper>(), ""};
     entries["symplectic_euler"] = {"", nullptr, "semi_implicit_euler"};
+    entries[kContactStepper] = {
+        "the contact scheme: v* = v + h a, impulses of limits and contact (velocity level), "
+        "then f <- f exp(h V0), q <- q + h qdot with the new rates (order 1)",
+        detail::make_contact_stepper, ""};
     entries["rkmk4"] = {"classical Runge-Kutta 4 in Runge-Kutta-Munthe-Kaas form (order 4)",
                         [](const Model& m, const StepperOptions& o) {
                           return make_rkmk_stepper(tableau_rk4(), m, o);

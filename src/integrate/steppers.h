@@ -12,6 +12,7 @@ std::unique_ptr<Stepper> make_variational_stepper(const Model& model, const Step
 std::unique_ptr<Stepper> make_rk4_euler_angles_stepper(const Model& model,
                                                        const StepperOptions& opt);
 std::unique_ptr<Stepper> make_rk4_quaternion_stepper(const Model& model, const StepperOptions& opt);
+std::unique_ptr<Stepper> make_contact_stepper(const Model& model, const StepperOptions& opt);
 
 }  // namespace detail
 }  // namespace se3

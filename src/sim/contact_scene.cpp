@@ -5,12 +5,13 @@
 //     pin: {type: point_world, link_a: base, point_a: [0, 0, 0], point_b: [0, 0, 1]}
 //     pin0: {type: point_world, link_a: base, point_b: initial}   # where the point starts
 //     up: {type: axis_parallel, link_a: base, axis_a: [0, 0, 1], axis_world: [0, 0, 1]}
-//   joint_limits: true           # URDF position limits as unilateral constraints
-//   ground: {normal: [0, 0, 1], offset: 0, mu: 0.8, from_collisions: false}
+//   joint_limits: false          # URDF position limits as unilateral constraints (default on)
+//   ground: {normal: [0, 0, 1], offset: 0, mu: 0.8, restitution: 0, from_collisions: false}
 //   contacts:                    # spheres on links (radius 0: a point), by name
 //     FL: {link: FL_FOOT, position: [0, 0, 0], radius: 0.016}
 //   constraint_options: {baumgarte_omega: 20, baumgarte_zeta: 1, project: true,
-//                        pgs_iterations: 200, erp: 0.2, slop: 1e-4, margin: 0.01}
+//                        pgs_iterations: 200, erp: 0.2, slop: 1e-4, margin: 0.01,
+//                        restitution_velocity: 0.2, solver: pgs}     # or active_set
 // directions name world axes (x, y, z) or give vectors [dx, dy, dz].
 #include "contact_scene.h"
 
@@ -111,12 +112,14 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
     for (const Field& c : r.fields(v, {}, true)) parse_bilateral(r, c, spec);
   } else if (key == "joint_limits") {
     spec.joint_limits = r.boolean(v);
+    spec.joint_limits_given = true;
   } else if (key == "ground") {
     if (v.node.IsScalar()) {
       spec.ground = r.boolean(v);
       return;
     }
-    const std::vector<Field> fields = r.fields(v, {"normal", "offset", "mu", "from_collisions"});
+    const std::vector<Field> fields =
+        r.fields(v, {"normal", "offset", "mu", "restitution", "from_collisions"});
     spec.ground = true;
     for (const Field& f : fields) {
       if (f.name == "normal") {
@@ -125,6 +128,8 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
         spec.ground_offset = r.number(f);
       } else if (f.name == "mu") {
         spec.mu = r.non_negative(f);
+      } else if (f.name == "restitution") {
+        spec.options.restitution = r.in_range(f, 0, 1);
       } else {
         spec.contacts_from_collisions = r.boolean(f);
       }
@@ -150,9 +155,18 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
     for (const Field& x :
          r.fields(v, {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol",
                       "projection_iterations", "singular_tol", "pgs_iterations", "pgs_tol", "erp",
-                      "slop", "margin", "bilateral_erp"})) {
+                      "slop", "margin", "bilateral_erp", "restitution_velocity", "solver"})) {
       const std::string& k = x.name;
-      if (k == "project") {
+      if (k == "solver") {
+        const std::string name = r.text(x);
+        if (name == "pgs") {
+          o.solver = ContactSolver::PGS;
+        } else if (name == "active_set") {
+          o.solver = ContactSolver::ActiveSet;
+        } else {
+          r.fail(x, "'" + x.key + "' is pgs or active_set, got '" + name + "'");
+        }
+      } else if (k == "project") {
         o.project = r.boolean(x);
       } else if (k == "projection_iterations") {
         o.projection_iterations = static_cast<int>(r.integer(x, 0, 1000000));
@@ -171,6 +185,7 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
         if (k == "pgs_tol") o.pgs_tol = val;
         if (k == "slop") o.slop = val;
         if (k == "margin") o.margin = val;
+        if (k == "restitution_velocity") o.restitution_velocity = val;
       }
     }
   }

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "se3_sim/limits.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -116,7 +117,14 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   Simulator sim(std::move(model), x0, cfg);
-  if (!scene.constraints.empty()) sim.set_constraints(scene_constraints(scene, sim.model()));
+  const ConstraintSpec spec = scene_constraints(scene, sim.model());
+  if (!spec.empty()) sim.set_constraints(spec);
+  if (!scene.objects.empty()) sim.set_objects(scene.objects);
+  if (uses_scene_collision(scene)) {
+    const GeometryModel none;
+    sim.set_scene_collision(
+        scene_collision(scene, &sim.model(), scene.robot_path.empty() ? &none : nullptr));
+  }
   if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
 
   std::ofstream csv;
@@ -185,6 +193,12 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     r.momentum_drift_rel = h0.norm() > 0 ? dh / h0.norm() : dh;
     r.com_drift_max = dc;
   }
+  const bool contact = !scene.objects.empty() || spec.ground || !spec.contacts.empty();
+  if (contact) r.penetration_max = sim.penetration_max();
+  for (std::size_t j = 0; j < sim.object_specs().size() && j < sim.objects().size(); ++j) {
+    r.objects.push_back(
+        {sim.object_specs()[j].name, sim.objects()[j].pose, sim.objects()[j].twist});
+  }
   return r;
 }
 
@@ -219,7 +233,24 @@ std::string simulate_result_json(const SimulateResult& r) {
     << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max)
-    << ", \"diverged\": " << (r.diverged ? "true" : "false")
+    << ", \"penetration_max\": " << num(r.penetration_max);
+  if (!r.objects.empty()) {
+    auto list = [&](const double* v, int n) {
+      std::string out = "[";
+      for (int k = 0; k < n; ++k) out += (k ? ", " : "") + num(v[k]);
+      return out + "]";
+    };
+    o << ", \"objects\": {";
+    for (std::size_t j = 0; j < r.objects.size(); ++j) {
+      const SimulateResult::FinalObject& ob = r.objects[j];
+      const Eigen::Vector4d q = quaternion_from_rotation(ob.pose.R);
+      o << (j ? ", " : "") << text(ob.name) << ": {\"position\": " << list(ob.pose.p.data(), 3)
+        << ", \"orientation\": " << list(q.data(), 4) << ", \"twist\": " << list(ob.twist.data(), 6)
+        << "}";
+    }
+    o << "}";
+  }
+  o << ", \"diverged\": " << (r.diverged ? "true" : "false")
     << ", \"status\": " << (r.status.empty() ? std::string("null") : text(r.status)) << "}";
   return o.str();
 }

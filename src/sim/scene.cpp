@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "contact_scene.h"
+#include "scene_objects_reader.h"
 #include "scene_reader.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/sim.h"
@@ -148,6 +149,16 @@ void read_controllers(const SceneReader& r, const Field& v, Scene& s) {
   }
 }
 
+void read_contact(const SceneReader& r, const Field& v, Scene& s) {
+  for (const Field& f : r.fields(v, {"margin", "max_contacts_per_pair"})) {
+    if (f.name == "margin") {
+      s.contact_margin = r.non_negative(f);
+    } else {
+      s.max_contacts_per_pair = static_cast<int>(r.integer(f, 1, 64));
+    }
+  }
+}
+
 // The top-level keys and what reads each. A later key (objects, ...) is one more row.
 using KeyReader = void (*)(const SceneReader&, const Field&, Scene&);
 const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
@@ -198,6 +209,9 @@ const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
        [](const SceneReader& r, const Field& v, Scene& s) { s.friction_eps = r.positive(v); }},
       {"chain", read_chain},
       {"controllers", read_controllers},
+      {"self_collision",
+       [](const SceneReader& r, const Field& v, Scene& s) { s.self_collision = r.boolean(v); }},
+      {"contact", read_contact},
   };
   return keys;
 }
@@ -239,9 +253,19 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
   std::vector<std::string> known;
   for (const auto& k : scene_keys()) known.push_back(k.first);
   for (const auto& k : constraint_scene_keys()) known.push_back(k);  // constraints.h
+  known.push_back("objects");                                        // these two need base_dir
+  known.push_back("srdf");
   Scene s;
   s.file = file_for_messages;
   for (const Field& f : r.fields(root, known)) {
+    if (f.name == "objects") {
+      read_scene_objects(r, f, base_dir, s.objects);
+      continue;
+    }
+    if (f.name == "srdf") {
+      s.srdf = read_scene_srdf(r, f, base_dir);
+      continue;
+    }
     bool done = false;
     for (const auto& k : scene_keys()) {
       if (f.name == k.first) {
@@ -276,6 +300,14 @@ Scene load_scene(const std::string& path) {
 
 Model scene_model(const Scene& scene, const std::string& urdf_xml) {
   Model m;
+  if (urdf_xml.empty() && scene.robot_path.empty() && !scene.objects.empty()) {
+    // Objects and no robot: an empty robot (a fixed base without mass or joints, nv = 0).
+    m.floating = false;
+    m.start_with_base("world");
+    m.gravity = scene.gravity;
+    m.finalize();
+    return m;
+  }
   if (urdf_xml.empty() && scene.robot_path.empty()) {
     throw SceneError((scene.file.empty() ? std::string("the scene") : scene.file) +
                      ": no robot: the scene has no 'robot:' and none was given (a URDF, e.g. "

@@ -1,4 +1,6 @@
 // The geometry of a scene's robot, and the collision shapes its contact constraints may use.
+#include <cmath>
+
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -13,6 +15,15 @@ GeometryModel scene_geometry(const Scene& scene, const Model& model, const std::
 ConstraintSpec scene_constraints(const Scene& scene, const Model& model,
                                  const std::string& urdf_xml) {
   ConstraintSpec spec = scene.constraints;
+  // Joint position limits are on unless the scene says joint_limits: false (a robot without
+  // any limit gets no limit rows, and so no constraint step).
+  if (!spec.joint_limits_given) {
+    spec.joint_limits = false;
+    for (int i = 1; i <= model.n; ++i) {
+      spec.joint_limits =
+          spec.joint_limits || std::isfinite(model.lower[i]) || std::isfinite(model.upper[i]);
+    }
+  }
   if (spec.contacts_from_collisions && !spec.geometry) {
     GeometryOptions opt;
     opt.load_meshes = false;

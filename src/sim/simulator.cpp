@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -83,6 +84,40 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
   reset();
 }
 
+Simulator::~Simulator() = default;
+
+CollisionModel* Simulator::collider() const {
+  return scene_collision_ ? &scene_collision_->model : collision_.get();
+}
+
+const std::vector<Contact>& Simulator::contacts() const {
+  return collision_data_.contacts;
+}
+
+const std::vector<CollisionObject>* Simulator::contact_objects() const {
+  const CollisionModel* c = collider();
+  return c ? &c->objects() : nullptr;
+}
+
+void Simulator::set_scene_collision(SceneCollision&& collision) {
+  if (collision.robot_bodies != model_->n + 1 ||
+      collision.free_objects != static_cast<int>(bodies_.size())) {
+    throw std::invalid_argument(
+        "scene collision frames do not match the simulator's robot and "
+        "free objects");
+  }
+  scene_collision_ = std::make_unique<SceneCollision>(std::move(collision));
+  // The contact spheres are in the scene collision now: the constraint system keeps the
+  // ground only as the reason for velocity-level steps.
+  spec_.contacts.clear();
+  spec_.contacts_from_collisions = false;
+  frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
+  free_poses_.assign(bodies_.size(), SE3());
+  collision_data_.contacts.reserve(256);
+  rebuild_constraints();
+  reset();
+}
+
 void Simulator::set_initial_state(const State& s) {
   if (s.q.size() != model_->n || s.v.size() != model_->nv) {
     throw std::invalid_argument("state sizes do not match the model");
@@ -130,6 +165,7 @@ void Simulator::reset() {
   refresh_reference();
   W_ = W_checked_ = 0;
   passive_power_ = passive_power();
+  reset_objects();
 }
 
 void Simulator::refresh_reference() {
@@ -280,17 +316,150 @@ const VecX& Simulator::step_forces() {
   return forces_;
 }
 
-void Simulator::set_constraints(const ConstraintSpec& spec) {
+void Simulator::set_objects(const std::vector<SceneObject>& objects) {
+  std::vector<ObjectBody> bodies;
+  for (size_t j = 0; j < objects.size(); ++j) {
+    const SceneObject& o = objects[j];
+    if (!o.pose.p.allFinite() || !is_rotation(o.pose.R) || !o.twist.allFinite()) {
+      throw std::invalid_argument("object '" + o.name + "': pose or twist is not finite");
+    }
+    if (o.is_static) continue;
+    if (!(o.mass > 0) || !std::isfinite(o.mass) || !(o.inertia.m > 0)) {
+      throw std::invalid_argument("object '" + o.name + "': a free object needs a mass > 0");
+    }
+    ObjectBody b;
+    b.index = static_cast<int>(j);
+    b.model = std::make_unique<Model>();
+    b.model->floating = true;
+    b.model->start_with_base(o.name, o.inertia);
+    b.model->gravity = model_->gravity;
+    b.model->finalize();
+    b.model->validate();
+    b.initial = State(*b.model);
+    b.initial.base = o.pose;
+    b.initial.v = o.twist;
+    bodies.push_back(std::move(b));
+  }
+  object_specs_ = objects;
+  bodies_ = std::move(bodies);
+  scene_collision_.reset();  // its frames were for the objects before
+  body_models_.clear();
+  body_states_.clear();
+  body_a_.clear();
+  collision_.reset();
+  std::vector<CollisionObject> colliders;
+  for (size_t j = 0, free_index = 0; j < object_specs_.size(); ++j) {
+    const SceneObject& o = object_specs_[j];
+    CollisionObject c;
+    c.name = o.name;
+    c.shape = o.shape;
+    c.group = 1;
+    c.mu = o.mu;
+    c.restitution = o.restitution;
+    if (o.is_static) {
+      c.frame = CollisionObject::kWorld;
+      c.placement = o.pose;
+    } else {
+      c.frame = model_->n + 1 + static_cast<int>(free_index++);
+    }
+    colliders.push_back(c);
+  }
+  for (const ObjectBody& b : bodies_) {
+    body_models_.push_back(b.model.get());
+    body_states_.push_back(b.initial);
+    body_a_.push_back(VecX::Zero(6));
+  }
+  if (spec_.ground) {  // the plane n.x = offset, solid below: z <= 0 of its shape frame
+    CollisionObject g;
+    g.name = "ground";
+    g.halfspace = true;
+    g.group = 1;
+    g.mu = spec_.mu;
+    g.restitution = spec_.options.restitution;
+    const Vec3 n = spec_.ground_normal.normalized();
+    Vec3 t1, t2;
+    tangent_basis(n, t1, t2);
+    g.placement.R.col(0) = t1;
+    g.placement.R.col(1) = t2;
+    g.placement.R.col(2) = n;
+    g.placement.p = spec_.ground_offset * n;
+    colliders.push_back(g);
+  }
+  if (!bodies_.empty()) {
+    CollisionOptions copt;
+    copt.margin = spec_.options.margin;
+    collision_ = std::make_unique<CollisionModel>(std::move(colliders), copt);
+    frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
+    collision_data_.contacts.reserve(64 * bodies_.size());
+  }
+  contacts_fresh_ = false;
+  body_last_good_ = body_states_;
+  rebuild_constraints();
+  reset();
+}
+
+void Simulator::reset_objects() {
+  objects_.resize(object_specs_.size());
+  for (size_t j = 0; j < object_specs_.size(); ++j) {
+    ObjectState& s = objects_[j];
+    s.name = object_specs_[j].name;
+    s.is_static = object_specs_[j].is_static;
+    s.pose = object_specs_[j].pose;
+    s.twist = s.is_static ? Vec6::Zero() : object_specs_[j].twist;
+  }
+  for (size_t j = 0; j < bodies_.size(); ++j) {
+    body_states_[j] = bodies_[j].initial;
+    body_last_good_[j] = bodies_[j].initial;
+  }
+  penetration_ = penetration_max_ = 0;
+  contacts_fresh_ = false;
+}
+
+double Simulator::collide_objects() {
+  CollisionModel* cm = collider();
+  if (!cm) return 0;
+  if (scene_collision_) {
+    forward_kinematics(*model_, diag_, state_.base, state_.q);
+    for (size_t j = 0; j < bodies_.size(); ++j) free_poses_[j] = body_states_[j].base;
+    scene_frame_poses(diag_.oMb, free_poses_, frame_poses_);
+  } else {
+    for (size_t j = 0; j < bodies_.size(); ++j) {
+      frame_poses_[model_->n + 1 + j] = body_states_[j].base;
+    }
+  }
+  collide(*cm, collision_data_, frame_poses_);
+  double deepest = 0;
+  for (const Contact& c : collision_data_.contacts) deepest = std::max(deepest, c.depth);
+  contacts_fresh_ = true;
+  return deepest;
+}
+
+void Simulator::rebuild_constraints() {
   constraints_.reset();
   constraints_start_.reset();
-  if (!spec.empty()) {
-    constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
-    constraints_->anchor(initial_);
-    State x = initial_;
-    constraints_->project(x);
-    initial_ = x;
-    constraints_start_ = std::make_unique<ConstraintSystem>(*constraints_);
+  if (spec_.empty() && bodies_.empty() && !scene_collision_) return;
+  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec_);
+  if (!bodies_.empty()) {
+    constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }
+  if (scene_collision_) {
+    constraints_->set_free_bodies(body_models_, 64 + static_cast<int>(16 * bodies_.size()));
+  }
+  constraints_->anchor(initial_);
+  State x = initial_;
+  constraints_->project(x);
+  initial_ = x;
+  constraints_start_ = std::make_unique<ConstraintSystem>(*constraints_);
+}
+
+void Simulator::set_constraints(const ConstraintSpec& spec) {
+  spec_ = spec;
+  if (!object_specs_.empty()) {
+    const std::vector<SceneObject> objects = object_specs_;
+    set_objects(objects);  // the ground and its mu may have changed: a new collision model
+    return;
+  }
+  rebuild_constraints();
   reset();
 }
 
@@ -365,9 +534,24 @@ bool Simulator::step() {
   const VecX& tau = step_forces();
   const int nv = model_->nv;
   const double P0 = dot(nv, tau.data(), state_.v.data()) + passive_power_;  // at the start
-  const StepInfo info = constraints_
-                            ? constrained_step(*constraints_, *stepper_, state_, tau, config_.dt)
-                            : stepper_->step(state_, tau, config_.dt);
+  StepInfo info;
+  if (constraints_) {
+    ContactBodies cb;
+    if (!bodies_.empty() || scene_collision_) {
+      for (size_t j = 0; j < bodies_.size(); ++j) {
+        free_body_acceleration(*bodies_[j].model, body_states_[j], body_a_[j]);
+      }
+      if (!contacts_fresh_) collide_objects();
+      cb.models = &body_models_;
+      cb.states = &body_states_;
+      cb.a_free = &body_a_;
+      cb.contacts = &collision_data_.contacts;
+      cb.objects = &collider()->objects();
+    }
+    info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
+  } else {
+    info = stepper_->step(state_, tau, config_.dt);
+  }
   evaluations_ += info.evaluations;
   substeps_ += info.substeps;
   rejected_ += info.rejected;
@@ -375,6 +559,19 @@ bool Simulator::step() {
   if (!(info.ok && rates_ok() && (!energy_step || energy_ok()))) {
     roll_back(info);
     return false;
+  }
+  if (constraints_) {
+    penetration_ = constraints_->report().penetration;
+    if (!bodies_.empty() || scene_collision_) {
+      penetration_ = std::max(penetration_, collide_objects());
+      for (size_t j = 0; j < bodies_.size(); ++j) {
+        ObjectState& o = objects_[bodies_[j].index];
+        o.pose = body_states_[j].base;
+        o.twist = body_states_[j].v;
+        save(body_states_[j], body_last_good_[j]);
+      }
+    }
+    penetration_max_ = std::max(penetration_max_, penetration_);
   }
   ++steps_;
   time_ += config_.dt;
@@ -413,6 +610,8 @@ void Simulator::roll_back(const StepInfo& info) {
           std::to_string(config_.guard.energy_growth) + " x the reference " +
           std::to_string(E_ref_) + " J";
   }
+  for (size_t j = 0; j < bodies_.size(); ++j) body_states_[j] = body_last_good_[j];
+  contacts_fresh_ = false;
   const State& back = to_checked ? last_checked_ : last_good_;
   state_.base = back.base;
   state_.q = back.q;
@@ -480,6 +679,11 @@ void Simulator::link_poses(std::vector<SE3>& out) {
   }
 }
 
+bool uses_scene_collision(const Scene& scene) {
+  return !scene.objects.empty() || scene.self_collision ||
+         scene.constraints.contacts_from_collisions;
+}
+
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml) {
   Model m = scene_model(scene, urdf_xml);
   const State x = scene_state(scene, m);
@@ -489,8 +693,14 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
-  if (!scene.constraints.empty()) {
-    sim->set_constraints(scene_constraints(scene, sim->model(), urdf_xml));
+  const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
+  if (!spec.empty()) sim->set_constraints(spec);
+  if (!scene.objects.empty()) sim->set_objects(scene.objects);
+  if (uses_scene_collision(scene)) {
+    const GeometryModel none;
+    const bool robot = !(urdf_xml.empty() && scene.robot_path.empty());
+    sim->set_scene_collision(
+        scene_collision(scene, &sim->model(), robot ? nullptr : &none, urdf_xml));
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   return sim;

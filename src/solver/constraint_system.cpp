@@ -1,12 +1,11 @@
 // Constrained dynamics: bilateral constraints with multipliers from eq. (32), their projection,
-// and velocity-level time stepping with joint limits and Coulomb contact (constraints.h).
-#include "se3_sim/constraints.h"
-
+// and the velocity level of time stepping with joint limits, Coulomb contact and free bodies
+// (constraints.h), on the rows of constraint.h and the solvers of solver.h.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "joint.h"
+#include "se3_sim/constraints.h"
 
 namespace se3 {
 
@@ -26,13 +25,6 @@ namespace {
 
 bool is_world(const std::string& link) {
   return link.empty() || link == "world";
-}
-
-// Two unit vectors completing n (unit) to a right-handed orthonormal basis (t1, t2, n).
-void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
-  const Vec3 seed = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  t1 = seed.cross(n).normalized();
-  t2 = n.cross(t1);
 }
 
 Vec3 unit(const Vec3& v, const std::string& what) {
@@ -64,6 +56,13 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
       !(opt_.singular_tol > 0) || !(spec.mu >= 0) || !std::isfinite(spec.mu)) {
     throw ModelError("constraint options out of range");
   }
+  if (spec_.joint_limits) {  // limits on a model without any: no rows, no velocity-level step
+    bool any = false;
+    for (int i = 1; i <= model.n; ++i) {
+      any = any || std::isfinite(model.lower[i]) || std::isfinite(model.upper[i]);
+    }
+    spec_.joint_limits = any;
+  }
   alpha_ = 2.0 * opt_.baumgarte_zeta * opt_.baumgarte_omega;
   beta2_ = opt_.baumgarte_omega * opt_.baumgarte_omega;
   int row = 0;
@@ -80,7 +79,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
       b.axis_a = model.links[k_link].offset.R * unit(c.axis_a, b.name + " axis_a");
       b.axis_w = unit(c.axis_world, b.name + " axis_world");
       Vec3 t1, t2;
-      tangents(b.axis_w, t1, t2);
+      tangent_basis(b.axis_w, t1, t2);
       b.dirs = {t1, t2};
     } else {
       if (c.type == ConstraintType::PointPoint) {
@@ -166,13 +165,20 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
     }
   }
   const int nc = static_cast<int>(contacts_.size());
-  max_rows_ = nb_ + (spec.joint_limits ? 2 * model.n : 0) + 3 * nc;
+  params_.erp = opt_.erp;
+  params_.slop = opt_.slop;
+  params_.bilateral_erp = opt_.bilateral_erp;
+  params_.margin = opt_.margin;
+  params_.restitution_velocity = opt_.restitution_velocity;
+  solver_opt_.iterations = opt_.pgs_iterations;
+  solver_opt_.tol = opt_.pgs_tol;
+  solver_opt_.singular_tol = opt_.singular_tol;
 
   data_.reserve_minv(model);  // minv runs inside time steps
-  Sw_.assign(nv, Vec6::Zero());
+  kin_.reset(model, data_.oMb, 0);
   Vb_.assign(model.n + 1, Vec6::Zero());
   Ab_.assign(model.n + 1, Vec6::Zero());
-  Psi_ = MatX::Zero(nb_, nv);
+  Psi_ = ConstraintRows::RowMat::Zero(nb_, nv);
   Yb_ = MatX::Zero(nv, nb_);
   Wb_ = MatX::Zero(nb_, nb_);
   phi_ = VecX::Zero(nb_);
@@ -180,25 +186,34 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   rhs_ = VecX::Zero(nb_);
   lambda_ = VecX::Zero(nb_);
   mult_ = VecX::Zero(nb_);
-  ldlt_ = Eigen::LDLT<MatX>(nb_);
-  eig_ = Eigen::SelfAdjointEigenSolver<MatX>(nb_);
   a_ = VecX::Zero(nv);
   dq_ = VecX::Zero(nv);
-  vfree_ = VecX::Zero(nv);
-  J_ = MatX::Zero(max_rows_, nv);
-  Y_ = MatX::Zero(nv, max_rows_);
-  W_ = MatX::Zero(max_rows_, max_rows_);
-  b_ = VecX::Zero(max_rows_);
-  c_ = VecX::Zero(max_rows_);
-  p_ = VecX::Zero(max_rows_);
-  row_kind_.assign(max_rows_, kBil);
-  row_ref_.assign(max_rows_, 0);
   warm_contact_.assign(nc, Vec3::Zero());
   warm_lower_.assign(model.n + 1, 0.0);
   warm_upper_.assign(model.n + 1, 0.0);
   warm_bil_ = VecX::Zero(nb_);
   contact_gap_.assign(nc, std::numeric_limits<double>::infinity());
-
+  // The contact spheres and the ground as collision objects on the robot's frames.
+  for (int k = 0; k < nc; ++k) {
+    CollisionObject o;
+    o.name = contact_names_[k];
+    o.frame = contacts_[k].body;
+    o.shape.type = ShapeType::Sphere;
+    o.shape.radius = contact_radius_[k];
+    o.mu = spec.mu;
+    o.restitution = opt_.restitution;
+    ground_objects_.push_back(o);
+  }
+  CollisionObject ground;
+  ground.name = "ground";
+  ground.frame = CollisionObject::kWorld;
+  ground.halfspace = true;
+  ground.mu = spec.mu;
+  ground.restitution = opt_.restitution;
+  ground_objects_.push_back(ground);
+  ground_contacts_.reserve(nc);
+  ground_contact_sphere_.reserve(nc);
+  set_free_bodies({});
   for (const Bil& b : bil_) {
     ConstraintForce f;
     f.kind = ConstraintForce::Bilateral;
@@ -206,7 +221,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
     f.body = b.a.body;
     forces_.push_back(f);
   }
-  if (spec.joint_limits) {
+  if (spec_.joint_limits) {
     for (int i = 1; i <= model.n; ++i) {
       if (!std::isfinite(model.lower[i]) && !std::isfinite(model.upper[i])) continue;
       ConstraintForce f;
@@ -236,16 +251,61 @@ void ConstraintSystem::anchor(const State& x) {
   }
 }
 
+void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
+                                       int max_external_contacts) {
+  free_.clear();
+  free_.reserve(bodies.size());
+  for (const Model* m : bodies) {
+    if (!m || m->n != 0 || !m->floating) {
+      throw ModelError("a free body is a single free-floating body (n = 0)");
+    }
+    FreeBody f;
+    f.model = m;
+    f.Minv = m->inertia[0].matrix().inverse();
+    if (!f.Minv.allFinite()) throw ModelError("free body '" + m->name + "' has a singular inertia");
+    f.pose.assign(1, SE3());
+    free_.push_back(std::move(f));
+  }
+  nv_total_ = model_.nv + 6 * static_cast<int>(free_.size());
+  systems_.clear();
+  systems_.push_back(&kin_);
+  frames_.assign(model_.n + 1 + free_.size(), FrameRef{});
+  for (int i = 0; i <= model_.n; ++i) frames_[i] = FrameRef{0, i};
+  for (size_t j = 0; j < free_.size(); ++j) {
+    free_[j].kin.reset(*free_[j].model, free_[j].pose, model_.nv + 6 * static_cast<int>(j));
+    systems_.push_back(&free_[j].kin);
+    frames_[model_.n + 1 + j] = FrameRef{static_cast<int>(j) + 1, 0};
+  }
+  const int nc = static_cast<int>(contacts_.size());
+  // Rows: bilateral, limits, the internal contacts, and room for contacts from outside.
+  max_rows_ = nb_ + (spec_.joint_limits ? 2 * model_.n : 0) + 3 * nc +
+              3 * std::max(0, max_external_contacts);
+  rows_.reserve(nv_total_, max_rows_);
+  ws_.reserve(max_rows_, nb_);
+  Y_ = MatX::Zero(nv_total_, max_rows_);
+  W_ = MatX::Zero(max_rows_, max_rows_);
+  c_ = VecX::Zero(max_rows_);
+  p_ = VecX::Zero(max_rows_);
+  vfree_ = VecX::Zero(nv_total_);
+  one_contact_.assign(1, Contact{});
+}
+
+void ConstraintSystem::bind() {
+  // The kinematics views point into this object (a copy re-points them here).
+  kin_.model = &model_;
+  kin_.oMb = &data_.oMb;
+  systems_[0] = &kin_;
+  for (size_t j = 0; j < free_.size(); ++j) {
+    free_[j].kin.oMb = &free_[j].pose;
+    systems_[j + 1] = &free_[j].kin;
+  }
+}
+
 void ConstraintSystem::kinematics(const SE3& base, const VecX& q, const VecX* v) {
+  bind();
   forward_kinematics(model_, data_, base, q);
   const Model& m = model_;
-  if (m.floating) {
-    for (int k = 0; k < 6; ++k) Sw_[k] = act_motion(data_.oMb[0], Vec6::Unit(k));
-  }
-  for (int i = 1; i <= m.n; ++i) {
-    detail::with_joint(m.joints[i],
-                       [&](auto J) { J.world_axis(data_.oMb[i], Sw_[m.idx_v(i)].data()); });
-  }
+  kin_.update_world_axes();
   if (!v) return;
   body_twists(m, data_, *v);
   Vb_.swap(data_.V);  // kept here: the next aba call on data_ overwrites data_.V
@@ -254,40 +314,14 @@ void ConstraintSystem::kinematics(const SE3& base, const VecX& q, const VecX* v)
   for (int i = 1; i <= m.n; ++i) {
     const int p = m.parent[i];
     Ab_[i] = act_inv_motion(data_.Xup[i], Ab_[p]);
-    detail::with_joint(m.joints[i], [&](auto J) {
-      J.add_bias_acceleration(Vb[i].data(), (*v)[m.idx_v(i)], Ab_[i].data());
-    });
+    // S qdot x (body twist) ... the joint's velocity-product term: V_i x (S_i qdot_i).
+    const Vec6 Sq = Vec6::Unit(m.joints[i].axis()) * (*v)[m.idx_v(i)];
+    Ab_[i] += cross_motion(Vb[i], Sq);
   }
 }
 
 Vec3 ConstraintSystem::point_world(const PointRef& p) const {
   return p.body < 0 ? p.r : data_.oMb[p.body].act(p.r);
-}
-
-void ConstraintSystem::add_point_row(const PointRef& p, const Vec3& d, double s, MatX& M,
-                                     int row) const {
-  if (p.body < 0) return;
-  const Vec3 pw = data_.oMb[p.body].act(p.r);
-  const Vec3 pxd = pw.cross(d);  // d . (v + w x p) = d . v + w . (p x d)
-  auto add = [&](int col) {
-    const Vec6& S = Sw_[col];
-    M(row, col) += s * (d.dot(S.tail<3>()) + pxd.dot(S.head<3>()));
-  };
-  for (int j = p.body; j >= 1; j = model_.parent[j]) add(model_.idx_v(j));
-  if (model_.floating) {
-    for (int k = 0; k < 6; ++k) add(k);
-  }
-}
-
-void ConstraintSystem::add_angular_row(int body, const Vec3& c, double s, MatX& M, int row) const {
-  if (body < 0) return;
-  for (int j = body; j >= 1; j = model_.parent[j]) {
-    const int col = model_.idx_v(j);
-    M(row, col) += s * c.dot(Sw_[col].head<3>());
-  }
-  if (model_.floating) {
-    for (int k = 0; k < 6; ++k) M(row, k) += s * c.dot(Sw_[k].head<3>());
-  }
 }
 
 Vec3 ConstraintSystem::point_accel_bias(const PointRef& p) const {
@@ -315,19 +349,20 @@ void ConstraintSystem::fill_bilateral(bool with_bias) {
         const Vec3& e = b.dirs[k];
         const int r = b.row0 + k;
         phi_[r] = e.dot(u);
-        add_angular_row(b.a.body, u.cross(e), 1.0, Psi_, r);
+        angular_jacobian(kin_, b.a.body, u.cross(e), 1.0, Psi_.row(r).data());
         if (with_bias) gamma_[r] = e.dot(wdot.cross(u) + w.cross(w.cross(u)));
       }
     } else {
-      const Vec3 d_ab = point_world(b.a) - point_world(b.b);
+      const Vec3 pa = point_world(b.a), pb = point_world(b.b);
+      const Vec3 d_ab = pa - pb;
       Vec3 acc = Vec3::Zero();
       if (with_bias) acc = point_accel_bias(b.a) - point_accel_bias(b.b);
       for (size_t k = 0; k < b.dirs.size(); ++k) {
         const Vec3& d = b.dirs[k];
         const int r = b.row0 + static_cast<int>(k);
         phi_[r] = d.dot(d_ab);
-        add_point_row(b.a, d, 1.0, Psi_, r);
-        add_point_row(b.b, d, -1.0, Psi_, r);
+        point_jacobian(kin_, b.a.body, pa, d, 1.0, Psi_.row(r).data());
+        point_jacobian(kin_, b.b.body, pb, d, -1.0, Psi_.row(r).data());
         if (with_bias) gamma_[r] = d.dot(acc);
       }
     }
@@ -349,38 +384,10 @@ void ConstraintSystem::bilateral_bias(const SE3& base, const VecX& q, const VecX
 
 void ConstraintSystem::solve_multipliers(const VecX& rhs, VecX& out) {
   ++report_.solves;
-  const int m = static_cast<int>(rhs.size());
-  if (m == 0) return;
-  const double wmax = Wb_.diagonal().cwiseAbs().maxCoeff();
-  if (!(wmax > 0) || !std::isfinite(wmax)) {
-    out.setZero();
-    report_.rank = 0;
-    ++report_.singular_solves;
-    return;
-  }
-  ldlt_.compute(Wb_);
-  const auto D = ldlt_.vectorD();
-  const double dmax = D.cwiseAbs().maxCoeff();
-  if (ldlt_.info() == Eigen::Success && D.minCoeff() > opt_.singular_tol * dmax) {
-    out = ldlt_.solve(rhs);
-    report_.rank = m;
-    return;
-  }
-  // Rank deficient: the minimum-norm least-squares multiplier (pseudo-inverse).
-  ++report_.singular_solves;
-  eig_.compute(Wb_);
-  const auto& ev = eig_.eigenvalues();
-  const auto& V = eig_.eigenvectors();
-  const double thr = opt_.singular_tol * ev.cwiseAbs().maxCoeff();
-  out.setZero();
-  int rank = 0;
-  for (int k = 0; k < m; ++k) {
-    if (ev[k] > thr) {
-      out.noalias() += V.col(k) * (V.col(k).dot(rhs) / ev[k]);
-      ++rank;
-    }
-  }
-  report_.rank = rank;
+  if (rhs.size() == 0) return;
+  const SolverStats st = solve_equality(Wb_, rhs, out, ws_, opt_.singular_tol);
+  report_.rank = st.rank;
+  if (st.singular) ++report_.singular_solves;
 }
 
 const VecX& ConstraintSystem::acceleration(const SE3& base, const VecX& q, const VecX& v,
@@ -392,9 +399,11 @@ const VecX& ConstraintSystem::acceleration(const SE3& base, const VecX& q, const
   const MatX& Minv = minv(model_, data_, base, q);
   Yb_.noalias() = Minv * Psi_.transpose();  // D^-1 Psi^T
   Wb_.noalias() = Psi_ * Yb_;               // Psi D^-1 Psi^T
-  rhs_.noalias() = -(Psi_ * a_);
-  rhs_ -= gamma_;
-  if (alpha_ > 0) rhs_.noalias() -= alpha_ * (Psi_ * v);
+  // Written as GEMV updates: a negated or scaled product expression would be evaluated into a
+  // heap temporary first (Eigen, found by counting calloc).
+  rhs_ = -gamma_;
+  rhs_.noalias() -= Psi_ * a_;
+  if (alpha_ > 0) rhs_.noalias() -= (alpha_ * Psi_) * v;
   if (beta2_ > 0) rhs_ -= beta2_ * phi_;
   solve_multipliers(rhs_, lambda_);
   a_.noalias() += Yb_ * lambda_;
@@ -425,7 +434,8 @@ double ConstraintSystem::project(State& x) {
   const MatX& Minv = minv(model_, data_, x.base, x.q);
   Yb_.noalias() = Minv * Psi_.transpose();
   Wb_.noalias() = Psi_ * Yb_;
-  rhs_.noalias() = -(Psi_ * x.v);
+  rhs_.setZero();
+  rhs_.noalias() -= Psi_ * x.v;
   solve_multipliers(rhs_, mult_);
   x.v.noalias() += Yb_ * mult_;
   report_.bilateral_error = err;
@@ -441,7 +451,7 @@ double ConstraintSystem::error(const State& x) {
   }
   if (spec_.joint_limits) {
     for (int i = 1; i <= model_.n; ++i) {
-      const double qi = x.q[i - 1];
+      const double qi = x.q[model_.idx_q(i)];
       if (std::isfinite(model_.lower[i])) e = std::max(e, model_.lower[i] - qi);
       if (std::isfinite(model_.upper[i])) e = std::max(e, qi - model_.upper[i]);
     }
@@ -489,153 +499,158 @@ void ConstraintSystem::assemble_bilateral_forces(const VecX& lam, double scale) 
   }
 }
 
-bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h) {
-  const Model& m = model_;
-  vfree_ = x.v;
-  vfree_.noalias() += h * a_free;
-
-  // ---- rows
-  kinematics(x.base, x.q, nullptr);
-  J_.setZero();
-  int rows = 0;
-  if (nb_ > 0) {
-    fill_bilateral(false);
-    J_.topRows(nb_) = Psi_;
-    for (int r = 0; r < nb_; ++r) {
-      b_[r] = -opt_.bilateral_erp * phi_[r] / h;
-      row_kind_[r] = kBil;
-      row_ref_[r] = r;
-      p_[r] = warm_bil_[r];
-    }
-    rows = nb_;
-  }
-  auto gap_target = [&](double g) {
-    if (g >= 0) return -g / h;  // may close the gap within the step, no further
-    if (g >= -opt_.slop) return 0.0;
-    return -opt_.erp * (g + opt_.slop) / h;
-  };
-  int n_limits = 0;
-  if (spec_.joint_limits) {
-    for (int i = 1; i <= m.n; ++i) {
-      const int col = m.idx_v(i);
-      const double qi = x.q[i - 1];
-      const double reach = opt_.margin + std::abs(vfree_[col]) * h;
-      if (std::isfinite(m.lower[i]) && qi - m.lower[i] < reach) {
-        J_(rows, col) = 1.0;
-        b_[rows] = gap_target(qi - m.lower[i]);
-        row_kind_[rows] = kLimLower;
-        row_ref_[rows] = i;
-        p_[rows] = warm_lower_[i];
-        ++rows;
-        ++n_limits;
-      } else {
-        warm_lower_[i] = 0;
-      }
-      if (std::isfinite(m.upper[i]) && m.upper[i] - qi < reach) {
-        J_(rows, col) = -1.0;
-        b_[rows] = gap_target(m.upper[i] - qi);
-        row_kind_[rows] = kLimUpper;
-        row_ref_[rows] = i;
-        p_[rows] = warm_upper_[i];
-        ++rows;
-        ++n_limits;
-      } else {
-        warm_upper_[i] = 0;
-      }
-    }
-  }
-  int n_contacts = 0;
+void ConstraintSystem::ground_contacts() {
+  ground_contacts_.clear();
+  ground_contact_sphere_.clear();
   const Vec3& nrm = spec_.ground_normal;
-  Vec3 t1, t2;
-  tangents(nrm, t1, t2);
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const PointRef& c = contacts_[k];
-    if (c.body == 0 && !m.floating) continue;
-    PointRef cp = c;  // the body point at the sphere's lowest point
-    cp.r = c.r - contact_radius_[k] * (data_.oMb[c.body].R.transpose() * nrm);
-    const double g = nrm.dot(point_world(cp)) - spec_.ground_offset;
+    if (c.body == 0 && !model_.floating) continue;
+    const Vec3 lowest = point_world(c) - contact_radius_[k] * nrm;
+    const double g = nrm.dot(lowest) - spec_.ground_offset;
     contact_gap_[k] = g;
-    add_point_row(cp, nrm, 1.0, J_, rows);
-    const double vn = J_.row(rows).dot(vfree_);
-    if (g + h * std::min(0.0, vn) >= opt_.margin) {
-      J_.row(rows).setZero();
-      warm_contact_[k].setZero();
-      continue;
-    }
-    add_point_row(cp, t1, 1.0, J_, rows + 1);
-    add_point_row(cp, t2, 1.0, J_, rows + 2);
-    b_[rows] = gap_target(g);
-    b_[rows + 1] = b_[rows + 2] = 0;
-    row_kind_[rows] = kNormal;
-    row_kind_[rows + 1] = kTangent1;
-    row_kind_[rows + 2] = kTangent2;
-    row_ref_[rows] = row_ref_[rows + 1] = row_ref_[rows + 2] = static_cast<int>(k);
-    p_.segment<3>(rows) = warm_contact_[k];
-    rows += 3;
-    ++n_contacts;
+    Contact ct;
+    ct.a = static_cast<int>(contacts_.size());  // the ground
+    ct.b = static_cast<int>(k);
+    ct.point = lowest;
+    ct.normal = nrm;
+    ct.depth = -g;
+    ground_contacts_.push_back(ct);
+    ground_contact_sphere_.push_back(static_cast<int>(k));
   }
+}
 
-  // ---- Delassus matrix and projected Gauss-Seidel
+void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in) {
+  kinematics(x.base, x.q, nullptr);
+  for (size_t j = 0; j < free_.size(); ++j) {
+    free_[j].pose[0] = (*in.bodies)[j].base;
+    free_[j].kin.update_world_axes();
+  }
+  rows_.clear();
+  // Bilateral rows, at the velocity level.
+  for (size_t k = 0; k < bil_.size(); ++k) {
+    const Bil& b = bil_[k];
+    const int id = static_cast<int>(k);
+    if (b.type == ConstraintType::AxisParallel) {
+      add_axis_rows(rows_, kin_, b.a.body, data_.oMb[b.a.body].R * b.axis_a, b.dirs[0], b.dirs[1],
+                    h, params_, id);
+    } else {
+      add_point_rows(rows_, kin_, b.a.body, point_world(b.a), &kin_, b.b.body, point_world(b.b),
+                     b.dirs, h, params_, id);
+    }
+  }
+  if (spec_.joint_limits) {
+    add_joint_limit_rows(rows_, kin_, x.q, vfree_, h, params_);
+  }
+  // The contact spheres against the ground: a contact within reach (gap + approach h < margin).
+  if (spec_.ground) {
+    ground_contacts();
+    for (const Contact& ct : ground_contacts_) {
+      one_contact_[0] = ct;
+      const int n = rows_.count;
+      add_contact_rows(rows_, one_contact_, ground_objects_, frames_, systems_, vfree_, h, params_);
+      rows_.id[n] = rows_.id[n + 1] = rows_.id[n + 2] = ct.b;  // the sphere
+      const double vn = rows_.J.row(n).dot(vfree_);
+      if (-ct.depth + h * std::min(0.0, vn) >= opt_.margin) rows_.count = n;  // out of reach
+    }
+  }
+  internal_rows_end_ = rows_.count;
+  if (in.contacts && in.objects && !in.contacts->empty()) {
+    const int room = (rows_.capacity() - rows_.count) / 3;
+    if (static_cast<int>(in.contacts->size()) <= room) {
+      add_contact_rows(rows_, *in.contacts, *in.objects, frames_, systems_, vfree_, h, params_);
+    } else {  // the deepest first, as many as fit
+      for (int k = 0; k < room; ++k) {
+        one_contact_[0] = (*in.contacts)[k];
+        add_contact_rows(rows_, one_contact_, *in.objects, frames_, systems_, vfree_, h, params_);
+      }
+    }
+  }
+}
+
+bool ConstraintSystem::unilateral_within_reach(const State& x, const VecX& a_free, double h,
+                                               const StepInput& in) {
+  vfree_.head(model_.nv) = x.v;
+  vfree_.head(model_.nv).noalias() += h * a_free;
+  for (size_t j = 0; j < free_.size() && in.bodies; ++j) {
+    vfree_.segment<6>(model_.nv + 6 * j) = (*in.bodies)[j].v + h * (*in.body_a_free)[j];
+  }
+  build_rows(x, h, in);
+  for (int r = 0; r < rows_.count; ++r) {
+    if (rows_.type[r] != RowType::Equality) return true;
+  }
+  return false;
+}
+
+bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, const StepInput& in) {
+  const Model& m = model_;
+  const int nvr = m.nv;
+  if (!free_.empty() && !(in.bodies && in.body_a_free)) {
+    throw std::invalid_argument("velocity_step: the free bodies' states are missing");
+  }
+  vfree_.head(nvr) = x.v;
+  vfree_.head(nvr).noalias() += h * a_free;
+  for (size_t j = 0; j < free_.size(); ++j) {
+    vfree_.segment<6>(nvr + 6 * j) = (*in.bodies)[j].v + h * (*in.body_a_free)[j];
+  }
+  build_rows(x, h, in);
+  const int rows = rows_.count;
+
+  // Warm starts by producer.
+  int n_limits = 0, n_contacts = 0;
+  for (int r = 0; r < rows; ++r) {
+    p_[r] = 0;
+    const int id = rows_.id[r];
+    switch (rows_.type[r]) {
+      case RowType::Equality:  // below
+        break;
+      case RowType::JointLimit:
+        p_[r] = rows_.J(r, m.idx_v(id)) > 0 ? warm_lower_[id] : warm_upper_[id];
+        ++n_limits;
+        break;
+      case RowType::ContactNormal:
+        if (r < internal_rows_end_) {
+          p_[r] = warm_contact_[id][0];
+          p_[rows_.friction[r]] = warm_contact_[id][1];
+          p_[rows_.friction2[r]] = warm_contact_[id][2];
+        }
+        ++n_contacts;
+        break;
+      case RowType::ContactFriction:
+        break;
+    }
+  }
+  // Bilateral rows come in each constraint's order: row r of the velocity rows is row r of Psi.
+  for (int r = 0; r < rows && r < nb_; ++r) p_[r] = warm_bil_[r];
+
+  // ---- Delassus matrix W = J D^-1 J^T (D^-1 block-diagonal by system) and the solve
   int it = 0;
   double change = 0;
   if (rows > 0) {
+    auto J = rows_.J.topRows(rows);
+    auto Y = Y_.leftCols(rows);
     const MatX& Minv = minv(m, data_, x.base, x.q);
-    auto Jr = J_.topRows(rows);
-    auto Yr = Y_.leftCols(rows);
-    auto Wr = W_.topLeftCorner(rows, rows);
-    Yr.noalias() = Minv * Jr.transpose();
-    Wr.noalias() = Jr * Yr;
-    auto cr = c_.head(rows);
-    cr.noalias() = Jr * vfree_;
-    cr -= b_.head(rows);
-    const double mu = spec_.mu;
-    for (it = 1; it <= opt_.pgs_iterations; ++it) {
-      change = 0;
-      for (int r = 0; r < rows; ++r) {
-        const double wii = W_(r, r);
-        const RowKind kind = static_cast<RowKind>(row_kind_[r]);
-        if (kind == kTangent2) continue;  // handled with its kTangent1 partner
-        if (!(wii > 1e-14)) continue;
-        if (kind == kTangent1) {
-          const double w22 = W_(r + 1, r + 1);
-          const double r1 = c_[r] + W_.row(r).head(rows).dot(p_.head(rows));
-          const double r2 = c_[r + 1] + W_.row(r + 1).head(rows).dot(p_.head(rows));
-          double n1 = p_[r] - r1 / wii;
-          double n2 = w22 > 1e-14 ? p_[r + 1] - r2 / w22 : 0.0;
-          const double lim = mu * p_[r - 1];
-          const double len = std::hypot(n1, n2);
-          if (len > lim) {
-            const double s = len > 0 ? lim / len : 0.0;
-            n1 *= s;
-            n2 *= s;
-          }
-          change = std::max(change, std::max(std::abs(n1 - p_[r]), std::abs(n2 - p_[r + 1])));
-          p_[r] = n1;
-          p_[r + 1] = n2;
-          continue;
-        }
-        const double res = c_[r] + W_.row(r).head(rows).dot(p_.head(rows));
-        double np = p_[r] - res / wii;
-        if (kind != kBil) np = std::max(0.0, np);
-        change = std::max(change, std::abs(np - p_[r]));
-        p_[r] = np;
-      }
-      if (change <= opt_.pgs_tol) break;
+    Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
+    for (size_t j = 0; j < free_.size(); ++j) {
+      const int c0 = nvr + 6 * static_cast<int>(j);
+      Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
     }
-    it = std::min(it, opt_.pgs_iterations);
-    x.v = vfree_;
-    x.v.noalias() += Yr * p_.head(rows);
-  } else {
-    x.v = vfree_;
+    auto W = W_.topLeftCorner(rows, rows);
+    W.noalias() = J * Y;
+    auto c = c_.head(rows);
+    c.noalias() = J * vfree_;
+    c -= rows_.b.head(rows);
+    const SolverStats st = opt_.solver == ContactSolver::ActiveSet
+                               ? solve_active_set(W_, c_, rows_, p_, ws_, solver_opt_)
+                               : solve_pgs(W_, c_, rows_, p_, solver_opt_);
+    it = st.iterations;
+    change = st.change;
+    vfree_.noalias() += Y * p_.head(rows);
   }
+  x.v = vfree_.head(nvr);
+  for (size_t j = 0; j < free_.size(); ++j) (*in.bodies)[j].v = vfree_.segment<6>(nvr + 6 * j);
   ++report_.solves;
-
-  // ---- positions with the new velocities (symplectic Euler on SE(3))
-  if (m.floating) {
-    x.base = x.base * exp_se3(h * x.v.head<6>());
-    x.base.R = orthonormalize(x.base.R);
-  }
-  x.q.noalias() += h * x.v.tail(m.n);
+  ++report_.velocity_steps;
 
   // ---- warm starts and forces (world frame, at the start-of-step configuration)
   for (ConstraintForce& f : forces_) {
@@ -655,52 +670,63 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h) {
     const int i = limit_force_index_[k];
     ConstraintForce& f = forces_[n_bil_forces + k];
     f.point = data_.oMb[i].p;
-    const double ql = x.q[i - 1];
+    const double ql = x.q[m.idx_q(i)];
     f.gap = std::min(ql - m.lower[i], m.upper[i] - ql);
   }
+  const Vec3& nrm = spec_.ground_normal;
   for (size_t k = 0; k < contacts_.size(); ++k) {
     ConstraintForce& f = forces_[n_bil_forces + n_limit_forces + k];
     f.point = point_world(contacts_[k]) - contact_radius_[k] * nrm;
     f.gap = contact_gap_[k];
   }
-  for (int r = nb_; r < rows; ++r) {
-    const int kind = row_kind_[r];
-    const int ref = row_ref_[r];
-    if (kind == kLimLower || kind == kLimUpper) {
-      const double s = kind == kLimLower ? 1.0 : -1.0;
-      (kind == kLimLower ? warm_lower_ : warm_upper_)[ref] = p_[r];
+  for (int i = 1; i <= m.n; ++i) warm_lower_[i] = warm_upper_[i] = 0;
+  for (Vec3& w : warm_contact_) w.setZero();
+  for (int r = nb_; r < internal_rows_end_; ++r) {
+    const int id = rows_.id[r];
+    if (rows_.type[r] == RowType::JointLimit) {
+      const bool lower = rows_.J(r, m.idx_v(id)) > 0;
+      (lower ? warm_lower_ : warm_upper_)[id] = p_[r];
       for (int k = 0; k < n_limit_forces; ++k) {
-        if (limit_force_index_[k] != ref) continue;
+        if (limit_force_index_[k] != id) continue;
         ConstraintForce& f = forces_[n_bil_forces + k];
-        f.joint_force += s * p_[r] / h;
+        f.joint_force += (lower ? 1.0 : -1.0) * p_[r] / h;
         f.active = f.active || p_[r] > 0;
       }
-    } else if (kind == kNormal) {
-      warm_contact_[ref] = p_.segment<3>(r);
-      ConstraintForce& f = forces_[n_bil_forces + n_limit_forces + ref];
-      f.force = (p_[r] * nrm + p_[r + 1] * t1 + p_[r + 2] * t2) / h;
+    } else if (rows_.type[r] == RowType::ContactNormal) {
+      const int f1 = rows_.friction[r], f2 = rows_.friction2[r];
+      warm_contact_[id] = Vec3(p_[r], p_[f1], p_[f2]);
+      Vec3 t1, t2;
+      tangent_basis(nrm, t1, t2);
+      ConstraintForce& f = forces_[n_bil_forces + n_limit_forces + id];
+      f.force = (p_[r] * nrm + p_[f1] * t1 + p_[f2] * t2) / h;
       f.active = p_[r] > 0;
     }
   }
-
   report_.rows = rows;
   report_.active_contacts = n_contacts;
   report_.active_limits = n_limits;
   report_.pgs_iterations = it;
   report_.pgs_change = change;
+  bool finite = x.v.allFinite();
+  for (size_t j = 0; j < free_.size(); ++j) finite = finite && (*in.bodies)[j].v.allFinite();
+  return finite;
+}
 
+void ConstraintSystem::finish_velocity_step(State& x) {
+  const Model& m = model_;
   if (opt_.project && nb_ > 0) project(x);
   // Errors at the end of the step.
   kinematics(x.base, x.q, nullptr);
   report_.penetration = 0;
-  for (size_t k = 0; k < contacts_.size(); ++k) {
+  const Vec3& nrm = spec_.ground_normal;
+  for (size_t k = 0; spec_.ground && k < contacts_.size(); ++k) {
     const double g = nrm.dot(point_world(contacts_[k])) - contact_radius_[k] - spec_.ground_offset;
     report_.penetration = std::max(report_.penetration, -g);
   }
   report_.limit_violation = 0;
   if (spec_.joint_limits) {
     for (int i = 1; i <= m.n; ++i) {
-      const double qi = x.q[i - 1];
+      const double qi = x.q[m.idx_q(i)];
       if (std::isfinite(m.lower[i])) {
         report_.limit_violation = std::max(report_.limit_violation, m.lower[i] - qi);
       }
@@ -713,7 +739,6 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h) {
     fill_bilateral(false);
     report_.bilateral_error = phi_.cwiseAbs().maxCoeff();
   }
-  return x.finite();
 }
 
 }  // namespace se3

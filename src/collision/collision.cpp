@@ -1,0 +1,485 @@
+// The collision layer (collision.h) on FCL 0.7: objects as fcl::CollisionObjectd (meshes as the
+// fcl::Convexd of their hull), a dynamic AABB tree for the broad phase, FCL's distance and
+// collide for the narrow phase; half-spaces (the ground) are tested here in closed form.
+#include "se3_sim/collision.h"
+
+#include <fcl/fcl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace se3 {
+namespace {
+
+// An FCL object whose world AABB can be grown by the margin (the broad phase must report
+// pairs that are apart by less than the margin).
+struct Object : fcl::CollisionObjectd {
+  using fcl::CollisionObjectd::CollisionObjectd;
+  void inflate(double m) {
+    aabb.min_.array() -= m;
+    aabb.max_.array() += m;
+  }
+};
+
+fcl::Transform3d to_fcl(const SE3& f) {
+  fcl::Transform3d t = fcl::Transform3d::Identity();
+  t.linear() = f.R;
+  t.translation() = f.p;
+  return t;
+}
+
+bool positive(double x) {
+  return x > 0 && std::isfinite(x);
+}
+
+}  // namespace
+
+struct CollisionModel::Impl {
+  int n = 0;
+  std::vector<std::unique_ptr<Object>> fcl;              ///< null for half-spaces
+  std::vector<std::shared_ptr<const ConvexHull>> hulls;  ///< meshes only
+  std::vector<int> halfspaces;
+  std::vector<int> moving;             ///< objects on a frame other than kWorld
+  std::vector<SE3> world;              ///< shape frames in the world, from the last collide()
+  std::vector<unsigned char> allowed;  ///< n x n: may_collide
+  int max_frame = -1;
+  fcl::DynamicAABBTreeCollisionManagerd manager;
+  fcl::CollisionRequestd request;
+  fcl::CollisionResultd result;
+  fcl::DistanceRequestd dist_request;
+  fcl::DistanceResultd dist_result;
+  // Per call.
+  CollisionData* data = nullptr;
+  double margin = 0;
+  int max_contacts = 4;
+  // Half-space candidates: points and their signed distances (reserved once).
+  std::vector<Vec3> points;
+  std::vector<double> gaps;
+  std::vector<int> picked, cand;
+  std::vector<double> dist;
+
+  bool ok(int i, int j) const { return allowed[std::size_t(i) * n + j] != 0; }
+};
+
+namespace {
+
+// Points of shape i (world) that may touch the plane n.x = offset (n unit, solid below): the
+// deepest point of a sphere, the 8 corners of a box, 4 points on each rim of a cylinder (the
+// lowest, the highest and the two between), the two cap bottoms of a capsule. (A hull's
+// vertices are used in place.)
+void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
+                          std::vector<Vec3>& pts) {
+  pts.clear();
+  const Shape& s = o.shape;
+  switch (s.type) {
+    case ShapeType::Sphere:
+      pts.push_back(T.p - s.radius * n);
+      break;
+    case ShapeType::Box: {
+      const Vec3 h = s.box / 2;
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 c((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
+        pts.push_back(T.p + T.R * c);
+      }
+      break;
+    }
+    case ShapeType::Cylinder: {
+      const Vec3 a = T.R.col(2);
+      Vec3 u = -(n - n.dot(a) * a);  // towards the plane, across the axis
+      if (u.norm() < 1e-9) {
+        u = T.R.col(0);
+      } else {
+        u.normalize();
+      }
+      const Vec3 e = a.cross(u);
+      for (double side : {-1.0, 1.0}) {
+        const Vec3 c = T.p + side * s.length / 2 * a;
+        pts.push_back(c + s.radius * u);
+        pts.push_back(c - s.radius * u);
+        pts.push_back(c + s.radius * e);
+        pts.push_back(c - s.radius * e);
+      }
+      break;
+    }
+    case ShapeType::Capsule: {
+      const Vec3 a = T.R.col(2);
+      pts.push_back(T.p + s.length / 2 * a - s.radius * n);
+      pts.push_back(T.p - s.length / 2 * a - s.radius * n);
+      break;
+    }
+    case ShapeType::Mesh:  // the hull's vertices, used in place
+      break;
+  }
+}
+
+// Up to max of the candidates below the margin: the deepest first, then each next the one
+// farthest (across the normal) from those already picked, so that a resting face keeps its
+// corners (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first;
+// cand and dist are workspaces.
+void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, const Vec3& n,
+                 double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
+                 std::vector<double>& dist) {
+  picked.clear();
+  cand.clear();
+  int deepest = -1;
+  for (int i = 0; i < int(pts.size()); ++i) {
+    if (!(gaps[i] < margin)) continue;
+    cand.push_back(i);
+    if (deepest < 0 || gaps[i] < gaps[deepest]) deepest = i;
+  }
+  if (deepest < 0) return;
+  picked.push_back(deepest);
+  dist.assign(cand.size(), INFINITY);
+  int last = deepest;
+  while (int(picked.size()) < max) {
+    int best = -1;
+    double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
+    for (std::size_t k = 0; k < cand.size(); ++k) {
+      Vec3 r = pts[cand[k]] - pts[last];
+      r -= r.dot(n) * n;
+      dist[k] = std::min(dist[k], r.squaredNorm());
+      if (dist[k] > best_d) {
+        best_d = dist[k];
+        best = cand[k];
+      }
+    }
+    if (best < 0) break;
+    picked.push_back(best);
+    last = best;
+  }
+  std::sort(picked.begin(), picked.end(), [&](int x, int y) { return gaps[x] < gaps[y]; });
+}
+
+// Contacts of object b against half-space h: a = h, normal = the plane's outward normal.
+void collide_halfspace(CollisionModel& model, int h, int b) {
+  CollisionModel::Impl& m = model.impl();
+  const SE3& P = m.world[h];
+  const Vec3 n = P.R.col(2);
+  const double offset = n.dot(P.p);
+  const CollisionObject& o = model.objects()[b];
+  const SE3& T = m.world[b];
+  // Early out on the shape's bounding sphere (FCL's AABB of the object, inflated).
+  if (m.fcl[b]) {
+    const fcl::AABBd& box = m.fcl[b]->getAABB();
+    const Vec3 c = (box.min_ + box.max_) / 2, r = (box.max_ - box.min_) / 2;
+    if (n.dot(c) - offset - r.cwiseProduct(n.cwiseAbs()).sum() > m.margin) return;
+  }
+  ++m.data->pairs_tested;
+  // In the shape's frame: gap = n_l . v + d0 per candidate point v (one dot product per hull
+  // vertex; only the picked points are carried to the world).
+  const Vec3 nl = T.R.transpose() * n;
+  const double d0 = n.dot(T.p) - offset;
+  const std::vector<Vec3>* pts = &m.points;
+  if (o.shape.type == ShapeType::Mesh) {
+    pts = &m.hulls[b]->vertices;
+  } else {
+    halfspace_candidates(o, SE3(), nl, m.points);
+  }
+  for (std::size_t i = 0; i < pts->size(); ++i) m.gaps[i] = nl.dot((*pts)[i]) + d0;
+  pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist);
+  for (int i : m.picked) {
+    Contact c;
+    c.a = h;
+    c.b = b;
+    c.normal = n;
+    c.depth = -m.gaps[i];
+    // Midway between the shape's point and the plane.
+    c.point = T.p + T.R * (*pts)[i] + c.depth / 2 * n;
+    m.data->contacts.push_back(c);
+  }
+}
+
+// The point of object o (world pose T) farthest along u (unit): its support point.
+Vec3 support(const CollisionObject& o, const ConvexHull* hull, const SE3& T, const Vec3& u) {
+  const Shape& s = o.shape;
+  const Vec3 a = T.R.col(2);
+  switch (s.type) {
+    case ShapeType::Sphere:
+      return T.p + s.radius * u;
+    case ShapeType::Box: {
+      const Vec3 l = T.R.transpose() * u;
+      const Vec3 c(l.x() >= 0 ? s.box.x() / 2 : -s.box.x() / 2,
+                   l.y() >= 0 ? s.box.y() / 2 : -s.box.y() / 2,
+                   l.z() >= 0 ? s.box.z() / 2 : -s.box.z() / 2);
+      return T.p + T.R * c;
+    }
+    case ShapeType::Cylinder: {
+      Vec3 perp = u - u.dot(a) * a;
+      const double pn = perp.norm();
+      perp = pn > 1e-12 ? Vec3(perp / pn) : Vec3::Zero();
+      return T.p + (u.dot(a) >= 0 ? 0.5 : -0.5) * s.length * a + s.radius * perp;
+    }
+    case ShapeType::Capsule:
+      return T.p + (u.dot(a) >= 0 ? 0.5 : -0.5) * s.length * a + s.radius * u;
+    case ShapeType::Mesh: {
+      const Vec3 l = T.R.transpose() * u;
+      Vec3 best = Vec3::Zero();
+      double far = -INFINITY;
+      if (hull) {
+        for (const Vec3& v : hull->vertices) {
+          if (v.dot(l) > far) {
+            far = v.dot(l);
+            best = v;
+          }
+        }
+      }
+      return T.p + T.R * best;
+    }
+  }
+  return T.p;
+}
+
+// Narrow phase of a pair that passed the filter and the broad phase: FCL's distance (GJK) first;
+// a pair apart by less than the margin gives one contact of negative depth between the nearest
+// points, a penetrating pair FCL's contacts (EPA or the closed forms FCL has for primitives).
+void collide_pair(CollisionModel& model, int i, int j) {
+  CollisionModel::Impl& m = model.impl();
+  if (i > j) std::swap(i, j);
+  ++m.data->pairs_tested;
+  const Object& oa = *m.fcl[i];
+  const Object& ob = *m.fcl[j];
+  m.dist_result.clear();
+  const double d = fcl::distance(&oa, &ob, m.dist_request, m.dist_result);
+  if (d > m.margin) return;
+  if (d > 0) {
+    const Vec3 pa = m.dist_result.nearest_points[0], pb = m.dist_result.nearest_points[1];
+    const Vec3 ab = pb - pa;
+    if (ab.norm() < 1e-12) return;
+    Contact c;
+    c.a = i;
+    c.b = j;
+    c.normal = ab / ab.norm();
+    c.depth = -d;
+    c.point = (pa + pb) / 2;
+    m.data->contacts.push_back(c);
+    return;
+  }
+  m.result.clear();
+  fcl::collide(&oa, &ob, m.request, m.result);
+  const std::size_t first = m.data->contacts.size();
+  for (std::size_t k = 0; k < m.result.numContacts(); ++k) {
+    const fcl::Contactd& fc = m.result.getContact(k);
+    const bool swapped = fc.o1 != oa.collisionGeometry().get();
+    Contact c;
+    c.a = i;
+    c.b = j;
+    c.normal = swapped ? Vec3(-fc.normal) : Vec3(fc.normal);
+    const double nn = c.normal.norm();
+    if (!(nn > 0.5)) continue;
+    c.normal /= nn;
+    c.depth = fc.penetration_depth;
+    c.point = fc.pos;
+    m.data->contacts.push_back(c);
+  }
+  if (m.data->contacts.size() == first) return;
+  std::sort(m.data->contacts.begin() + first, m.data->contacts.end(),
+            [](const Contact& x, const Contact& y) { return x.depth > y.depth; });
+  // FCL's points lie on one surface or the other, or between, depending on the algorithm
+  // (sphere-sphere weights by radius; EPA gives a witness point). For convex shapes the
+  // overlap along the normal is [n.s_b(-n), n.s_a(n)] (s the support points): move the points
+  // along n to its middle, by the shift that puts the deepest one there.
+  const CollisionObject& A = model.objects()[i];
+  const CollisionObject& B = model.objects()[j];
+  Contact& deepest = m.data->contacts[first];
+  const Vec3 n = deepest.normal;
+  const double mid = 0.5 * (n.dot(support(A, m.hulls[i].get(), m.world[i], n)) +
+                            n.dot(support(B, m.hulls[j].get(), m.world[j], -n)));
+  const double shift = mid - n.dot(deepest.point);
+  for (std::size_t k = first; k < m.data->contacts.size(); ++k) {
+    m.data->contacts[k].point += shift * n;
+  }
+}
+
+bool broadphase_callback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* cdata) {
+  auto* model = static_cast<CollisionModel*>(cdata);
+  const int i = int(reinterpret_cast<std::intptr_t>(o1->getUserData()));
+  const int j = int(reinterpret_cast<std::intptr_t>(o2->getUserData()));
+  if (model->impl().ok(i, j)) collide_pair(*model, i, j);
+  return false;
+}
+
+std::shared_ptr<fcl::CollisionGeometryd> fcl_shape(const CollisionObject& o,
+                                                   const std::shared_ptr<const ConvexHull>& hull) {
+  const Shape& s = o.shape;
+  auto bad = [&](const char* what) {
+    throw std::invalid_argument("collision object '" + o.name + "': " + what);
+  };
+  switch (s.type) {
+    case ShapeType::Box:
+      if (!(positive(s.box.x()) && positive(s.box.y()) && positive(s.box.z()))) {
+        bad("a box needs three positive extents");
+      }
+      return std::make_shared<fcl::Boxd>(s.box.x(), s.box.y(), s.box.z());
+    case ShapeType::Sphere:
+      if (!positive(s.radius)) bad("a sphere needs a positive radius");
+      return std::make_shared<fcl::Sphered>(s.radius);
+    case ShapeType::Cylinder:
+      if (!positive(s.radius) || !positive(s.length)) {
+        bad("a cylinder needs a positive radius and length");
+      }
+      return std::make_shared<fcl::Cylinderd>(s.radius, s.length);
+    case ShapeType::Capsule:
+      if (!positive(s.radius) || !(s.length >= 0)) bad("a capsule needs a positive radius");
+      return std::make_shared<fcl::Capsuled>(s.radius, s.length);
+    case ShapeType::Mesh: {
+      auto verts = std::make_shared<std::vector<fcl::Vector3d>>(hull->vertices.begin(),
+                                                                hull->vertices.end());
+      auto faces = std::make_shared<std::vector<int>>();
+      faces->reserve(hull->triangles.size() * 4);
+      for (const auto& t : hull->triangles) {
+        faces->push_back(3);
+        faces->insert(faces->end(), t.begin(), t.end());
+      }
+      return std::make_shared<fcl::Convexd>(verts, int(hull->triangles.size()), faces);
+    }
+  }
+  bad("unknown shape");
+  return nullptr;
+}
+
+}  // namespace
+
+CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOptions options)
+    : objects_(std::move(objects)), options_(std::move(options)), impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  const int n = int(objects_.size());
+  m.n = n;
+  m.fcl.resize(n);
+  m.hulls.resize(n);
+  m.world.resize(n);
+  if (!(options_.margin >= 0) || !std::isfinite(options_.margin)) {
+    throw std::invalid_argument("collision options: the margin must be >= 0");
+  }
+  if (options_.max_contacts_per_pair < 1) {
+    throw std::invalid_argument("collision options: max_contacts_per_pair must be >= 1");
+  }
+  // Hulls, once per (mesh, scale).
+  std::map<std::pair<const TriangleMesh*, std::array<double, 3>>, std::shared_ptr<const ConvexHull>>
+      hull_cache;
+  for (int i = 0; i < n; ++i) {
+    const CollisionObject& o = objects_[i];
+    if (o.frame < CollisionObject::kWorld) {
+      throw std::invalid_argument("collision object '" + o.name + "': frame " +
+                                  std::to_string(o.frame) + " is not a frame");
+    }
+    m.max_frame = std::max(m.max_frame, o.frame);
+    if (o.frame != CollisionObject::kWorld) m.moving.push_back(i);
+    if (o.halfspace) {
+      m.halfspaces.push_back(i);
+      continue;
+    }
+    if (o.shape.type == ShapeType::Mesh) {
+      if (!o.shape.mesh || o.shape.mesh->triangle_count() == 0) {
+        throw std::invalid_argument("collision object '" + o.name + "': a mesh without triangles");
+      }
+      const std::array<double, 3> sc{o.shape.scale.x(), o.shape.scale.y(), o.shape.scale.z()};
+      auto& h = hull_cache[{o.shape.mesh.get(), sc}];
+      if (!h) {
+        h = std::make_shared<const ConvexHull>(
+            convex_hull(*o.shape.mesh, o.shape.scale, "collision object '" + o.name + "'"));
+      }
+      m.hulls[i] = h;
+    }
+    m.fcl[i] = std::make_unique<Object>(fcl_shape(o, m.hulls[i]));
+    m.fcl[i]->setUserData(reinterpret_cast<void*>(std::intptr_t(i)));
+  }
+  // The filter.
+  std::set<std::pair<std::string, std::string>> disabled;
+  for (const auto& p : options_.disabled_links) {
+    disabled.insert(p);
+    disabled.insert({p.second, p.first});
+  }
+  std::set<std::pair<int, int>> adjacent;
+  for (const FramePair& p : options_.adjacent) {
+    adjacent.insert({p.a, p.b});
+    adjacent.insert({p.b, p.a});
+  }
+  m.allowed.assign(std::size_t(n) * n, 0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const CollisionObject& a = objects_[i];
+      const CollisionObject& b = objects_[j];
+      bool ok = i != j;
+      ok = ok && !(a.halfspace && b.halfspace);
+      ok = ok && a.frame != b.frame;  // also static-static: both on kWorld
+      ok = ok && !adjacent.count({a.frame, b.frame});
+      ok = ok && !(a.group == 0 && b.group == 0 && !options_.self_collision);
+      ok = ok && !(!a.link.empty() && !b.link.empty() && disabled.count({a.link, b.link}));
+      m.allowed[std::size_t(i) * n + j] = ok;
+    }
+  }
+  // Static objects are placed once; the broad phase holds every non-half-space object.
+  std::vector<fcl::CollisionObjectd*> all;
+  for (int i = 0; i < n; ++i) {
+    if (objects_[i].frame == CollisionObject::kWorld) m.world[i] = objects_[i].placement;
+    if (!m.fcl[i]) continue;
+    m.fcl[i]->setTransform(to_fcl(m.world[i]));
+    m.fcl[i]->computeAABB();
+    m.fcl[i]->inflate(options_.margin / 2);
+    all.push_back(m.fcl[i].get());
+  }
+  m.manager.registerObjects(all);
+  m.manager.setup();
+  m.request.enable_contact = true;
+  m.request.num_max_contacts = std::size_t(options_.max_contacts_per_pair);
+  m.dist_request.enable_nearest_points = true;
+  m.dist_request.enable_signed_distance = false;
+  m.margin = options_.margin;
+  m.max_contacts = options_.max_contacts_per_pair;
+  m.picked.reserve(std::size_t(options_.max_contacts_per_pair) + 1);
+  std::size_t most = 8;
+  for (const auto& h : m.hulls) {
+    if (h) most = std::max(most, h->vertices.size());
+  }
+  m.points.reserve(most);
+  m.gaps.assign(most, 0.0);  // sized once: at least as many as any object's candidates
+  m.cand.reserve(most);
+  m.dist.reserve(most);
+}
+
+CollisionModel::~CollisionModel() = default;
+CollisionModel::CollisionModel(CollisionModel&&) noexcept = default;
+CollisionModel& CollisionModel::operator=(CollisionModel&&) noexcept = default;
+
+bool CollisionModel::may_collide(int i, int j) const {
+  const int n = int(objects_.size());
+  if (i < 0 || j < 0 || i >= n || j >= n) return false;
+  return impl_->ok(i, j);
+}
+
+const ConvexHull* CollisionModel::hull(int i) const {
+  if (i < 0 || i >= int(objects_.size())) return nullptr;
+  return impl_->hulls[i].get();
+}
+
+void collide(CollisionModel& model, CollisionData& data, const std::vector<SE3>& frame_poses) {
+  CollisionModel::Impl& m = model.impl();
+  if (int(frame_poses.size()) <= m.max_frame) {
+    throw std::invalid_argument("collide: " + std::to_string(frame_poses.size()) +
+                                " frame poses for frames up to " + std::to_string(m.max_frame));
+  }
+  data.contacts.clear();
+  data.pairs_tested = 0;
+  m.data = &data;
+  const std::vector<CollisionObject>& objs = model.objects();
+  for (int i : m.moving) {
+    m.world[i] = frame_poses[objs[i].frame] * objs[i].placement;
+    if (!m.fcl[i]) continue;
+    m.fcl[i]->setTransform(to_fcl(m.world[i]));
+    m.fcl[i]->computeAABB();
+    m.fcl[i]->inflate(m.margin / 2);
+  }
+  m.manager.update();
+  m.manager.collide(&model, broadphase_callback);
+  for (int h : m.halfspaces) {
+    for (int b = 0; b < m.n; ++b) {
+      if (m.fcl[b] && m.ok(h, b)) collide_halfspace(model, h, b);
+    }
+  }
+  m.data = nullptr;
+}
+
+}  // namespace se3

@@ -1,0 +1,178 @@
+// The rows of one step and their builders (constraint.h).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "se3_sim/constraint.h"
+
+namespace se3 {
+
+void SystemKinematics::reset(const Model& m, const std::vector<SE3>& poses, int first_column) {
+  model = &m;
+  oMb = &poses;
+  col0 = first_column;
+  Sw.assign(m.nv, Vec6::Zero());
+}
+
+void SystemKinematics::update_world_axes() {
+  const Model& m = *model;
+  const std::vector<SE3>& X = *oMb;
+  if (m.floating) {
+    for (int k = 0; k < 6; ++k) Sw[k] = act_motion(X[0], Vec6::Unit(k));
+  }
+  for (int i = 1; i <= m.n; ++i) Sw[m.idx_v(i)] = act_motion(X[i], Vec6::Unit(m.joints[i].axis()));
+}
+
+void ConstraintRows::reserve(int columns, int cap) {
+  nv = columns;
+  count = 0;
+  J = RowMat::Zero(cap, columns);
+  b = VecX::Zero(cap);
+  type.assign(cap, RowType::Equality);
+  id.assign(cap, kNone);
+  friction.assign(cap, kNone);
+  friction2.assign(cap, kNone);
+  normal.assign(cap, kNone);
+  mu.assign(cap, 0.0);
+  gap.assign(cap, 0.0);
+}
+
+int ConstraintRows::add(RowType t, int producer) {
+  if (count >= capacity()) throw std::length_error("constraint rows: capacity exceeded");
+  const int r = count++;
+  J.row(r).setZero();
+  b[r] = 0;
+  type[r] = t;
+  id[r] = producer;
+  friction[r] = friction2[r] = normal[r] = kNone;
+  mu[r] = 0;
+  gap[r] = 0;
+  return r;
+}
+
+void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,
+                    double* row) {
+  if (body < 0 || !sys.model) return;
+  const Model& m = *sys.model;
+  const Vec3 pxd = p.cross(d);  // d . (v + w x p) = d . v + w . (p x d)
+  double* out = row + sys.col0;
+  auto add = [&](int col) {
+    const Vec6& S = sys.Sw[col];
+    out[col] += s * (d.dot(S.tail<3>()) + pxd.dot(S.head<3>()));
+  };
+  for (int j = body; j >= 1; j = m.parent[j]) add(m.idx_v(j));
+  if (m.floating) {
+    for (int k = 0; k < 6; ++k) add(k);
+  }
+}
+
+void angular_jacobian(const SystemKinematics& sys, int body, const Vec3& c, double s, double* row) {
+  if (body < 0 || !sys.model) return;
+  const Model& m = *sys.model;
+  double* out = row + sys.col0;
+  for (int j = body; j >= 1; j = m.parent[j]) {
+    const int col = m.idx_v(j);
+    out[col] += s * c.dot(sys.Sw[col].head<3>());
+  }
+  if (m.floating) {
+    for (int k = 0; k < 6; ++k) out[k] += s * c.dot(sys.Sw[k].head<3>());
+  }
+}
+
+double gap_reference(double g, double h, const RowParams& p) {
+  if (g >= 0) return -g / h;  // may close the gap within the step, no further (no tunnelling)
+  if (g >= -p.slop) return 0.0;
+  return -p.erp * (g + p.slop) / h;
+}
+
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const Vec3 seed = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  t1 = seed.cross(n).normalized();
+  t2 = n.cross(t1);
+}
+
+void add_point_rows(ConstraintRows& rows, const SystemKinematics& sa, int body_a, const Vec3& pa,
+                    const SystemKinematics* sb, int body_b, const Vec3& pb,
+                    const std::vector<Vec3>& dirs, double h, const RowParams& p, int id) {
+  const Vec3 d_ab = pa - pb;
+  for (const Vec3& d : dirs) {
+    const int r = rows.add(RowType::Equality, id);
+    point_jacobian(sa, body_a, pa, d, 1.0, rows.row(r));
+    if (sb) point_jacobian(*sb, body_b, pb, d, -1.0, rows.row(r));
+    rows.b[r] = -p.bilateral_erp * d.dot(d_ab) / h;
+  }
+}
+
+void add_axis_rows(ConstraintRows& rows, const SystemKinematics& s, int body, const Vec3& u,
+                   const Vec3& e1, const Vec3& e2, double h, const RowParams& p, int id) {
+  for (const Vec3* e : {&e1, &e2}) {
+    const int r = rows.add(RowType::Equality, id);
+    // d/dt (e . u) = e . (w x u) = (u x e) . w
+    angular_jacobian(s, body, u.cross(*e), 1.0, rows.row(r));
+    rows.b[r] = -p.bilateral_erp * e->dot(u) / h;
+  }
+}
+
+void add_joint_limit_rows(ConstraintRows& rows, const SystemKinematics& s, const VecX& q,
+                          const VecX& vfree, double h, const RowParams& p) {
+  const Model& m = *s.model;
+  for (int i = 1; i <= m.n; ++i) {
+    const int col = m.idx_v(i);
+    const double qi = q[m.idx_q(i)];
+    const double reach = p.margin + std::abs(vfree[col]) * h;
+    for (int side = 0; side < 2; ++side) {
+      const double limit = side == 0 ? m.lower[i] : m.upper[i];
+      if (!std::isfinite(limit)) continue;
+      const double g = side == 0 ? qi - limit : limit - qi;
+      if (g >= reach) continue;
+      const int r = rows.add(RowType::JointLimit, i);
+      rows.J(r, s.col0 + col) = side == 0 ? 1.0 : -1.0;
+      rows.b[r] = gap_reference(g, h, p);
+      rows.gap[r] = g;
+    }
+  }
+}
+
+void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts,
+                      const std::vector<CollisionObject>& objects,
+                      const std::vector<FrameRef>& frames,
+                      const std::vector<const SystemKinematics*>& systems, const VecX& vfree,
+                      double h, const RowParams& p) {
+  auto frame_of = [&](int object) {
+    const int f = objects[object].frame;
+    return f < 0 || f >= static_cast<int>(frames.size()) ? FrameRef{} : frames[f];
+  };
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const Contact& c = contacts[k];
+    const FrameRef fa = frame_of(c.a), fb = frame_of(c.b);
+    if (fa.system < 0 && fb.system < 0) continue;
+    const SystemKinematics* sa = fa.system >= 0 ? systems[fa.system] : nullptr;
+    const SystemKinematics* sb = fb.system >= 0 ? systems[fb.system] : nullptr;
+    Vec3 t1, t2;
+    tangent_basis(c.normal, t1, t2);
+    const int n = rows.add(RowType::ContactNormal, static_cast<int>(k));
+    const int f1 = rows.add(RowType::ContactFriction, static_cast<int>(k));
+    const int f2 = rows.add(RowType::ContactFriction, static_cast<int>(k));
+    const Vec3* dirs[3] = {&c.normal, &t1, &t2};
+    const int r3[3] = {n, f1, f2};
+    for (int j = 0; j < 3; ++j) {
+      if (sb) point_jacobian(*sb, fb.body, c.point, *dirs[j], 1.0, rows.row(r3[j]));
+      if (sa) point_jacobian(*sa, fa.body, c.point, *dirs[j], -1.0, rows.row(r3[j]));
+    }
+    rows.friction[n] = f1;
+    rows.friction2[n] = f2;
+    rows.normal[f1] = rows.normal[f2] = n;
+    rows.mu[n] = std::max(objects[c.a].mu, objects[c.b].mu);
+    const double g = -c.depth;
+    rows.gap[n] = g;
+    double ref = gap_reference(g, h, p);
+    const double e = std::max(objects[c.a].restitution, objects[c.b].restitution);
+    if (e > 0) {  // an impact within this step bounces: its velocity reversed, times e
+      const double vn = rows.J.row(n).dot(vfree);
+      if (vn < -p.restitution_velocity && g + h * vn <= p.slop) ref = std::max(ref, -e * vn);
+    }
+    rows.b[n] = ref;
+  }
+}
+
+}  // namespace se3

@@ -1,0 +1,189 @@
+// The collision model of a scene (scene_collision.h).
+#include "se3_sim/scene_collision.h"
+
+#include <sys/stat.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace se3 {
+namespace {
+
+std::string scene_name(const Scene& s) {
+  return s.file.empty() ? std::string("the scene") : s.file;
+}
+
+std::string read_text(const std::string& path, const Scene& scene) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(scene_name(scene) + ": cannot read srdf '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The nearest folder at or above the scene's that holds package.xml ("" if none): se3_sim's
+// own robots' meshes are in its data/meshes.
+std::string package_root(const std::string& file) {
+  std::string dir = file;
+  for (int depth = 0; depth < 32; ++depth) {
+    const auto slash = dir.find_last_of('/');
+    if (slash == std::string::npos) return "";
+    dir = dir.substr(0, slash);
+    struct stat st;
+    if (::stat((dir + "/package.xml").c_str(), &st) == 0) return dir;
+    if (dir.empty()) return "";
+  }
+  return "";
+}
+
+}  // namespace
+
+SceneCollision scene_collision(const Scene& scene, const Model* model,
+                               const GeometryModel* geometry, const std::string& urdf_xml) {
+  std::vector<CollisionObject> objs;
+  std::vector<int> scene_object, body;
+  CollisionOptions opt;
+  opt.margin = scene.contact_margin;
+  opt.max_contacts_per_pair = scene.max_contacts_per_pair;
+  opt.self_collision = scene.self_collision;
+  std::vector<std::string> warnings;
+  const double robot_mu = scene.constraints.mu;
+  int robot_bodies = 0;
+  if (model) {
+    robot_bodies = model->n + 1;
+    GeometryModel loaded;
+    if (!geometry) {
+      GeometryOptions gopt;
+      const std::string root =
+          package_root(scene.robot_path.empty() ? scene.file : scene.robot_path);
+      if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
+      loaded = scene_geometry(scene, *model, urdf_xml, gopt);
+      geometry = &loaded;
+    }
+    warnings = geometry->warnings;
+    for (const GeometryObject& g : geometry->collisions) {
+      if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
+      CollisionObject o;
+      o.name = g.name;
+      o.link = g.link;
+      o.frame = g.body;
+      o.placement = g.placement;
+      o.shape = g.shape;
+      o.group = 0;
+      o.mu = robot_mu;
+      objs.push_back(o);
+      scene_object.push_back(-1);
+      body.push_back(g.body);
+    }
+    for (std::size_t k = 0; k < scene.constraints.contacts.size(); ++k) {
+      const ContactPoint& c = scene.constraints.contacts[k];
+      const int li = model->link_index(c.link);
+      if (li < 0) {
+        throw SceneError(scene_name(scene) + ": contacts names link '" + c.link +
+                         "', which the robot lacks");
+      }
+      const LinkFrame& lf = model->links[li];
+      CollisionObject o;
+      o.name = c.name.empty() ? c.link + "_contact" + std::to_string(k) : c.name;
+      o.link = lf.name;
+      o.frame = lf.body;
+      o.placement = lf.offset * SE3(Mat3::Identity(), c.position);
+      o.shape = make_sphere(c.radius > 0 ? c.radius : 1e-6);  // radius 0: a point
+      o.group = 0;
+      o.mu = robot_mu;
+      objs.push_back(o);
+      scene_object.push_back(-1);
+      body.push_back(lf.body);
+    }
+    for (int i = 1; i <= model->n; ++i) opt.adjacent.push_back({model->parent[i], i});
+    // A fixed base never touches the world's static geometry: both are immovable.
+    if (!model->floating) opt.adjacent.push_back({0, CollisionObject::kWorld});
+    if (!scene.srdf.empty()) {
+      try {
+        opt.disabled_links = srdf_disabled_pairs(read_text(scene.srdf, scene));
+      } catch (const std::invalid_argument& e) {
+        throw SceneError(scene_name(scene) + ": srdf '" + scene.srdf + "': " + e.what());
+      }
+      for (const auto& p : opt.disabled_links) {
+        for (const std::string* l : {&p.first, &p.second}) {
+          if (model->link_index(*l) < 0) {
+            throw SceneError(scene_name(scene) + ": srdf '" + scene.srdf + "' names link '" + *l +
+                             "', which the robot lacks");
+          }
+        }
+      }
+    }
+  }
+  SceneCollision sc{CollisionModel({}, {}), robot_bodies, 0, {}, {}, {}, -1, warnings};
+  int next = robot_bodies;
+  for (std::size_t j = 0; j < scene.objects.size(); ++j) {
+    const SceneObject& so = scene.objects[j];
+    CollisionObject o;
+    o.name = so.name;
+    o.shape = so.shape;
+    o.group = 1;
+    o.mu = so.mu;
+    o.restitution = so.restitution;
+    if (so.is_static) {
+      o.frame = CollisionObject::kWorld;
+      o.placement = so.pose;
+    } else {
+      o.frame = next++;
+    }
+    sc.object_frame.push_back(o.frame);
+    objs.push_back(o);
+    scene_object.push_back(int(j));
+    body.push_back(-1);
+  }
+  sc.free_objects = next - robot_bodies;
+  if (scene.constraints.ground) {
+    CollisionObject g;
+    g.name = "ground";
+    g.halfspace = true;
+    g.group = 1;
+    g.mu = scene.constraints.mu;
+    const Vec3 n = scene.constraints.ground_normal.normalized();
+    // Any rotation taking z to n.
+    g.placement.R = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), n).toRotationMatrix();
+    g.placement.p = scene.constraints.ground_offset * n;
+    sc.ground = int(objs.size());
+    objs.push_back(g);
+    scene_object.push_back(-1);
+    body.push_back(-1);
+  }
+  try {
+    sc.model = CollisionModel(std::move(objs), std::move(opt));
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(scene_name(scene) + ": " + e.what());
+  }
+  sc.scene_object = std::move(scene_object);
+  sc.body = std::move(body);
+  return sc;
+}
+
+void scene_frame_poses(const std::vector<SE3>& body_poses,
+                       const std::vector<SE3>& free_object_poses, std::vector<SE3>& frames) {
+  frames.resize(body_poses.size() + free_object_poses.size());
+  std::copy(body_poses.begin(), body_poses.end(), frames.begin());
+  std::copy(free_object_poses.begin(), free_object_poses.end(),
+            frames.begin() + long(body_poses.size()));
+}
+
+std::vector<GeometryObject> scene_object_geometry(const std::vector<SceneObject>& objects,
+                                                  const std::vector<SE3>& poses) {
+  std::vector<GeometryObject> out;
+  for (std::size_t j = 0; j < objects.size(); ++j) {
+    GeometryObject g;
+    g.name = objects[j].name;
+    g.link = objects[j].name;
+    g.body = GeometryObject::kWorld;
+    g.placement = j < poses.size() ? poses[j] : objects[j].pose;
+    g.shape = objects[j].shape;
+    g.material = objects[j].material;
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
+}  // namespace se3

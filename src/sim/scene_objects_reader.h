@@ -1,0 +1,21 @@
+// Readers of the scene keys `objects:` and `srdf:` (scene_objects.cpp), used by scene.cpp.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "scene_reader.h"
+#include "se3_sim/scene_objects.h"
+
+namespace se3 {
+
+/// The `objects:` block list; mesh paths relative to base_dir. Throws SceneError naming the
+/// file, line and key (unknown shape, non-positive size or mass, missing mesh file, duplicate
+/// name, non-unit quaternion, ...).
+void read_scene_objects(const SceneReader& r, const SceneReader::Field& v,
+                        const std::string& base_dir, std::vector<SceneObject>& out);
+/// `srdf: PATH` (relative to base_dir): the file, which must exist.
+std::string read_scene_srdf(const SceneReader& r, const SceneReader::Field& v,
+                            const std::string& base_dir);
+
+}  // namespace se3

@@ -1,0 +1,385 @@
+// The collision layer (collision.h): closed-form contacts between primitives, the ground and
+// mesh hulls, the pair filter, margin contacts, SRDF pairs and bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "se3_sim/collision.h"
+
+using namespace se3;
+
+namespace {
+
+const std::string kRoot = SE3_SIM_SOURCE_DIR;
+
+CollisionObject object(const std::string& name, const Shape& s, int frame, int group = 1,
+                       const SE3& placement = SE3()) {
+  CollisionObject o;
+  o.name = name;
+  o.shape = s;
+  o.frame = frame;
+  o.group = group;
+  o.placement = placement;
+  return o;
+}
+
+CollisionObject ground(double height = 0) {
+  CollisionObject o;
+  o.name = "ground";
+  o.halfspace = true;
+  o.placement.p = Vec3(0, 0, height);
+  return o;
+}
+
+SE3 at(double x, double y, double z, const Mat3& R = Mat3::Identity()) {
+  return SE3(R, Vec3(x, y, z));
+}
+
+Mat3 rot(const Vec3& axis, double angle) {
+  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+}
+
+CollisionOptions no_margin() {
+  CollisionOptions o;
+  o.margin = 0;
+  return o;
+}
+
+std::string read_file(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST(Collision, SphereSphere) {
+  CollisionModel m({object("a", make_sphere(0.5), 0), object("b", make_sphere(0.3), 1)},
+                   no_margin());
+  CollisionData d;
+  collide(m, d, {at(0, 0, 0), at(0.7, 0, 0)});
+  ASSERT_EQ(d.contacts.size(), 1u);
+  const Contact& c = d.contacts[0];
+  EXPECT_EQ(c.a, 0);
+  EXPECT_EQ(c.b, 1);
+  EXPECT_NEAR(c.depth, 0.1, 1e-9);
+  EXPECT_TRUE(c.normal.isApprox(Vec3::UnitX(), 1e-9)) << c.normal.transpose();
+  // Surfaces at x = 0.5 (a) and 0.4 (b): midway 0.45.
+  EXPECT_TRUE(c.point.isApprox(Vec3(0.45, 0, 0), 1e-9)) << c.point.transpose();
+  // Apart: nothing; b on the other side: the normal turns.
+  collide(m, d, {at(0, 0, 0), at(0, 0.81, 0)});
+  EXPECT_TRUE(d.contacts.empty());
+  collide(m, d, {at(0, 0, 0), at(0, -0.75, 0)});
+  ASSERT_EQ(d.contacts.size(), 1u);
+  EXPECT_TRUE(d.contacts[0].normal.isApprox(-Vec3::UnitY(), 1e-9));
+  EXPECT_NEAR(d.contacts[0].depth, 0.05, 1e-9);
+}
+
+TEST(Collision, SphereHalfspace) {
+  CollisionModel m({ground(), object("ball", make_sphere(0.1), 0)}, no_margin());
+  CollisionData d;
+  collide(m, d, {at(0.3, -0.2, 0.08)});
+  ASSERT_EQ(d.contacts.size(), 1u);
+  const Contact& c = d.contacts[0];
+  EXPECT_EQ(c.a, 0);  // the ground
+  EXPECT_EQ(c.b, 1);
+  EXPECT_NEAR(c.depth, 0.02, 1e-12);
+  EXPECT_TRUE(c.normal.isApprox(Vec3::UnitZ(), 1e-12));
+  EXPECT_TRUE(c.point.isApprox(Vec3(0.3, -0.2, -0.01), 1e-12)) << c.point.transpose();
+  // A tilted, raised ground: normal (0, sin, cos), through (0, 0, 1).
+  CollisionObject g = ground();
+  g.placement = SE3(rot(Vec3::UnitX(), -0.3), Vec3(0, 0, 1));
+  CollisionModel tilted({g, object("ball", make_sphere(0.1), 0)}, no_margin());
+  const Vec3 n = g.placement.R.col(2);
+  collide(tilted, d, {at(0, 0, 1.05)});
+  ASSERT_EQ(d.contacts.size(), 1u);
+  EXPECT_NEAR(d.contacts[0].depth, 0.1 - 0.05 * n.z(), 1e-12);
+  EXPECT_TRUE(d.contacts[0].normal.isApprox(n, 1e-12));
+}
+
+TEST(Collision, BoxHalfspaceGivesItsFourLowCorners) {
+  const Mat3 R = rot(Vec3::UnitZ(), 0.5);
+  CollisionModel m({ground(), object("box", make_box(Vec3(0.2, 0.4, 0.1)), 0)}, no_margin());
+  CollisionData d;
+  collide(m, d, {at(1, 2, 0.04, R)});
+  ASSERT_EQ(d.contacts.size(), 4u);
+  for (const Contact& c : d.contacts) {
+    EXPECT_NEAR(c.depth, 0.01, 1e-12);
+    EXPECT_NEAR(c.point.z(), -0.005, 1e-12);
+    const Vec3 local = R.transpose() * (c.point - Vec3(1, 2, c.point.z()));
+    EXPECT_NEAR(std::abs(local.x()), 0.1, 1e-12);
+    EXPECT_NEAR(std::abs(local.y()), 0.2, 1e-12);
+  }
+  // The four are distinct corners.
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) {
+      EXPECT_GT((d.contacts[i].point - d.contacts[j].point).norm(), 0.1);
+    }
+  }
+  // On an edge (tilted 45 degrees about x): the two corners of the lowest edge.
+  const Mat3 Rx = rot(Vec3::UnitX(), M_PI / 4);
+  const double low = (0.4 / 2 + 0.1 / 2) / std::sqrt(2.0);  // centre height over the edge
+  collide(m, d, {at(0, 0, low - 0.002, Rx)});
+  ASSERT_EQ(d.contacts.size(), 2u);
+  for (const Contact& c : d.contacts) EXPECT_NEAR(c.depth, 0.002, 1e-12);
+  // Deepest first: tilted about y as well, the corners differ.
+  collide(m, d, {at(0, 0, 0.04, rot(Vec3::UnitY(), 0.05))});
+  ASSERT_GE(d.contacts.size(), 2u);
+  for (std::size_t i = 1; i < d.contacts.size(); ++i) {
+    EXPECT_GE(d.contacts[i - 1].depth, d.contacts[i].depth);
+  }
+}
+
+TEST(Collision, CylinderHalfspace) {
+  const double r = 0.05, l = 0.2;
+  CollisionModel m({ground(), object("can", make_cylinder(r, l), 0)}, no_margin());
+  CollisionData d;
+  // Upright: four points of the bottom rim, 3 mm deep.
+  collide(m, d, {at(0, 0, l / 2 - 0.003)});
+  ASSERT_EQ(d.contacts.size(), 4u);
+  for (const Contact& c : d.contacts) {
+    EXPECT_NEAR(c.depth, 0.003, 1e-12);
+    EXPECT_NEAR(std::hypot(c.point.x(), c.point.y()), r, 1e-12);
+  }
+  // On its side: the two ends of the lowest line.
+  collide(m, d, {at(0, 0, r - 0.001, rot(Vec3::UnitX(), M_PI / 2))});
+  ASSERT_EQ(d.contacts.size(), 2u);
+  for (const Contact& c : d.contacts) {
+    EXPECT_NEAR(c.depth, 0.001, 1e-12);
+    EXPECT_NEAR(std::abs(c.point.y()), l / 2, 1e-12);
+  }
+  // Tilted by t: the lowest rim point is at z - (l/2) cos t - r sin t.
+  const double t = 0.3, z = 0.1;
+  collide(m, d, {at(0, 0, z, rot(Vec3::UnitY(), t))});
+  ASSERT_GE(d.contacts.size(), 1u);
+  EXPECT_NEAR(d.contacts[0].depth, l / 2 * std::cos(t) + r * std::sin(t) - z, 1e-12);
+}
+
+TEST(Collision, CapsuleBox) {
+  // A capsule lying along x on the top face (z = 0.5) of a unit box, 5 mm into it.
+  const double r = 0.05, l = 0.3;
+  CollisionModel m({object("box", make_box(Vec3(1, 1, 1)), CollisionObject::kWorld),
+                    object("pill", make_capsule(r, l), 0)},
+                   no_margin());
+  CollisionData d;
+  collide(m, d, {at(0.1, 0, 0.5 + r - 0.005, rot(Vec3::UnitY(), M_PI / 2))});
+  ASSERT_GE(d.contacts.size(), 1u);
+  const Contact& c = d.contacts[0];
+  EXPECT_EQ(c.a, 0);
+  EXPECT_EQ(c.b, 1);
+  EXPECT_NEAR(c.depth, 0.005, 1e-6);
+  EXPECT_TRUE(c.normal.isApprox(Vec3::UnitZ(), 1e-6)) << c.normal.transpose();
+  EXPECT_NEAR(c.point.z(), 0.5 - 0.0025, 1e-4) << c.point.transpose();
+  // Upright on an edge of the box top: the lower cap's centre 2 mm above the face
+  // (x = 0.45), 3 mm deep.
+  collide(m, d, {at(0.45, 0, 0.5 + l / 2 + r - 0.003)});
+  ASSERT_GE(d.contacts.size(), 1u);
+  EXPECT_NEAR(d.contacts[0].depth, 0.003, 1e-6);
+  EXPECT_TRUE(d.contacts[0].normal.isApprox(Vec3::UnitZ(), 1e-6));
+}
+
+TEST(Collision, MeshHullOnTheGroundToAMicrometre) {
+  // Solo-12's foot mesh (as its URDF uses it), turned, with its lowest vertex 2.5 mm below z = 0.
+  Shape foot;
+  std::string err;
+  const std::string path =
+      kRoot +
+      "/data/meshes/example-robot-data/robots/solo_description/meshes/stl/with_foot/"
+      "solo_foot.stl";
+  ASSERT_TRUE(load_mesh_shape(
+      path, Vec3::Ones(), [](const std::string& u, std::string*) { return u; }, foot, &err))
+      << err;
+  const Mat3 R = rot(Vec3(1, 2, 3), 0.7);
+  double lowest = INFINITY;
+  for (const Vec3f& v : foot.mesh->positions) lowest = std::min(lowest, (R * v.cast<double>()).z());
+  const double z = -lowest - 0.0025;
+  CollisionModel m({ground(), object("foot", foot, 0)}, no_margin());
+  ASSERT_NE(m.hull(1), nullptr);
+  EXPECT_LE(m.hull(1)->vertices.size(), foot.mesh->positions.size());
+  CollisionData d;
+  collide(m, d, {at(0.2, 0.1, z, R)});
+  ASSERT_GE(d.contacts.size(), 1u);
+  EXPECT_NEAR(d.contacts[0].depth, 0.0025, 1e-6);
+  EXPECT_TRUE(d.contacts[0].normal.isApprox(Vec3::UnitZ(), 1e-12));
+  EXPECT_NEAR(d.contacts[0].point.z(), -0.00125, 1e-6);
+  for (const Contact& c : d.contacts) EXPECT_GT(c.depth, 0);  // no margin: penetrating only
+  // Raised 1 mm above the ground: nothing without a margin.
+  collide(m, d, {at(0.2, 0.1, z + 0.0035, R)});
+  EXPECT_TRUE(d.contacts.empty());
+}
+
+TEST(Collision, HullAgainstASphereMatchesTheMesh) {
+  // A box mesh's hull against a sphere: the same contact as the box primitive.
+  Shape boxmesh;
+  boxmesh.type = ShapeType::Mesh;
+  boxmesh.mesh = std::make_shared<TriangleMesh>(tessellate(make_box(Vec3(0.4, 0.4, 0.4))));
+  CollisionModel m(
+      {object("box", boxmesh, CollisionObject::kWorld), object("ball", make_sphere(0.1), 0)},
+      no_margin());
+  ASSERT_EQ(m.hull(0)->vertices.size(), 8u);
+  EXPECT_NEAR(m.hull(0)->volume, 0.064, 1e-7);  // float vertices
+  EXPECT_NEAR(m.hull(0)->inertia(0, 0), 0.064 * (0.16 + 0.16) / 12, 1e-9);
+  EXPECT_NEAR(m.hull(0)->inertia(0, 1), 0, 1e-9);
+  EXPECT_TRUE(m.hull(0)->centroid.norm() < 1e-7);
+  CollisionData d;
+  collide(m, d, {at(0.05, -0.03, 0.2 + 0.1 - 0.004)});
+  ASSERT_GE(d.contacts.size(), 1u);
+  EXPECT_NEAR(d.contacts[0].depth, 0.004, 1e-6);
+  EXPECT_TRUE(d.contacts[0].normal.isApprox(Vec3::UnitZ(), 1e-5)) << d.contacts[0].normal;
+  EXPECT_NEAR(d.contacts[0].point.z(), 0.2 - 0.002, 1e-6);
+}
+
+TEST(Collision, BoxOnBox) {
+  // A 0.2 box resting on a unit box's top, 2 mm into it, turned about z.
+  CollisionModel m({object("table", make_box(Vec3(1, 1, 1)), CollisionObject::kWorld),
+                    object("box", make_box(Vec3(0.2, 0.2, 0.2)), 0)},
+                   no_margin());
+  CollisionData d;
+  collide(m, d, {at(0.1, 0.1, 0.5 + 0.1 - 0.002, rot(Vec3::UnitZ(), 0.4))});
+  ASSERT_GE(d.contacts.size(), 1u);
+  for (const Contact& c : d.contacts) {
+    EXPECT_NEAR(c.depth, 0.002, 1e-9);
+    EXPECT_TRUE(c.normal.isApprox(Vec3::UnitZ(), 1e-9)) << c.normal.transpose();
+    EXPECT_NEAR(c.point.z(), 0.5 - 0.001, 1e-9);
+  }
+}
+
+TEST(Collision, MarginContactsHaveNegativeDepth) {
+  CollisionOptions opt;
+  opt.margin = 0.01;
+  CollisionModel m({ground(), object("a", make_sphere(0.5), 0), object("b", make_sphere(0.3), 1)},
+                   opt);
+  CollisionData d;
+  // a 4 mm above the ground, b 6 mm from a (along x), b 1 m up: two margin contacts.
+  collide(m, d, {at(0, 0, 0.504), at(0.806, 0, 0.504)});
+  std::vector<Contact> ab, ground_a;
+  for (const Contact& c : d.contacts) {
+    if (c.a == 1 && c.b == 2) ab.push_back(c);
+    if (c.a == 0 && c.b == 1) ground_a.push_back(c);
+  }
+  ASSERT_EQ(ab.size(), 1u);
+  EXPECT_NEAR(ab[0].depth, -0.006, 1e-9);
+  EXPECT_TRUE(ab[0].normal.isApprox(Vec3::UnitX(), 1e-9));
+  EXPECT_TRUE(ab[0].point.isApprox(Vec3(0.503, 0, 0.504), 1e-9)) << ab[0].point.transpose();
+  ASSERT_EQ(ground_a.size(), 1u);
+  EXPECT_NEAR(ground_a[0].depth, -0.004, 1e-12);
+  EXPECT_NEAR(ground_a[0].point.z(), 0.002, 1e-12);
+  // b is 0.504 - 0.3 above the ground: no contact; beyond the margin nothing at all.
+  collide(m, d, {at(0, 0, 0.52), at(0.82, 0, 0.52)});
+  EXPECT_TRUE(d.contacts.empty());
+}
+
+TEST(Collision, FilterSameFrameAdjacentSelfStaticAndSrdf) {
+  // Robot: frames 0 - 1 - 2 (a chain), each with a sphere at the origin; all overlap.
+  auto robot = [](const std::string& link, int frame) {
+    CollisionObject o = object(link, make_sphere(1.0), frame, 0);
+    o.link = link;
+    return o;
+  };
+  std::vector<CollisionObject> objs = {robot("l0", 0),
+                                       robot("l1", 1),
+                                       robot("l2", 2),
+                                       robot("l2", 2),  // a second shape of l2
+                                       object("table", make_sphere(1), CollisionObject::kWorld),
+                                       object("shelf", make_sphere(1), CollisionObject::kWorld)};
+  CollisionOptions opt = no_margin();
+  opt.adjacent = {{0, 1}, {1, 2}};
+  const std::vector<SE3> poses = {at(0, 0, 0), at(0.1, 0, 0), at(0.2, 0, 0)};
+  {
+    opt.self_collision = false;
+    CollisionModel m(objs, opt);
+    EXPECT_FALSE(m.may_collide(0, 2));  // self-collision off
+    EXPECT_FALSE(m.may_collide(4, 5));  // static-static
+    EXPECT_TRUE(m.may_collide(0, 4));   // robot - object
+    CollisionData d;
+    collide(m, d, poses);
+    for (const Contact& c : d.contacts) EXPECT_TRUE(c.a >= 4 || c.b >= 4);
+  }
+  opt.self_collision = true;
+  {
+    CollisionModel m(objs, opt);
+    EXPECT_TRUE(m.may_collide(0, 2));   // not adjacent
+    EXPECT_FALSE(m.may_collide(0, 1));  // adjacent
+    EXPECT_FALSE(m.may_collide(1, 2));
+    EXPECT_FALSE(m.may_collide(2, 3));  // same frame
+    EXPECT_FALSE(m.may_collide(4, 5));
+    CollisionData d;
+    collide(m, d, poses);
+    int self = 0;
+    for (const Contact& c : d.contacts) {
+      EXPECT_TRUE(m.may_collide(c.a, c.b));
+      if (c.a < 4 && c.b < 4) ++self;
+    }
+    EXPECT_EQ(self, 2);  // l0-l2 twice (two shapes)
+  }
+  opt.disabled_links = {{"l2", "l0"}};
+  {
+    CollisionModel m(objs, opt);
+    EXPECT_FALSE(m.may_collide(0, 2));
+    EXPECT_FALSE(m.may_collide(3, 0));
+    CollisionData d;
+    collide(m, d, poses);
+    for (const Contact& c : d.contacts) EXPECT_TRUE(c.a >= 4 || c.b >= 4);
+  }
+}
+
+TEST(Collision, SrdfPairs) {
+  const auto panda = srdf_disabled_pairs(read_file(
+      kRoot + "/data/meshes/example-robot-data/robots/panda_description/srdf/panda.srdf"));
+  EXPECT_GT(panda.size(), 10u);
+  EXPECT_NE(std::find(panda.begin(), panda.end(),
+                      std::make_pair(std::string("panda_link0"), std::string("panda_link1"))),
+            panda.end());
+  const auto pairs = srdf_disabled_pairs(
+      "<robot name='r'><group name='g'/>\n<disable_collisions link1='a' link2='b' "
+      "reason='Adjacent'/><disable_collisions link1='b' link2='c'/></robot>");
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[1].first, "b");
+  EXPECT_EQ(pairs[1].second, "c");
+  EXPECT_THROW(srdf_disabled_pairs("<robot><disable_collisions link1='a'"), std::invalid_argument);
+  try {
+    srdf_disabled_pairs("<robot>\n\n<disable_collisions link1='a'/></robot>");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("line 3"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(srdf_disabled_pairs("<notrobot/>"), std::invalid_argument);
+}
+
+TEST(Collision, BadInput) {
+  EXPECT_THROW(CollisionModel({object("b", make_box(Vec3(1, 0, 1)), 0)}, {}),
+               std::invalid_argument);
+  EXPECT_THROW(CollisionModel({object("s", make_sphere(-1), 0)}, {}), std::invalid_argument);
+  Shape empty;
+  empty.type = ShapeType::Mesh;
+  EXPECT_THROW(CollisionModel({object("m", empty, 0)}, {}), std::invalid_argument);
+  // A flat mesh has no hull.
+  Shape flat;
+  flat.type = ShapeType::Mesh;
+  auto tm = std::make_shared<TriangleMesh>();
+  tm->positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(1, 1, 0)};
+  tm->indices = {0, 1, 2, 1, 3, 2};
+  finish_mesh(*tm);
+  flat.mesh = tm;
+  try {
+    CollisionModel bad({object("flat", flat, 0)}, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("flat"), std::string::npos) << e.what();
+  }
+  CollisionModel m({object("a", make_sphere(1), 3)}, {});
+  CollisionData d;
+  EXPECT_THROW(collide(m, d, {SE3(), SE3()}), std::invalid_argument);
+  CollisionOptions neg;
+  neg.margin = -1;
+  EXPECT_THROW(CollisionModel({}, neg), std::invalid_argument);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
