@@ -37,8 +37,8 @@ std::string enclosing_joint(const std::string& xml, std::size_t pos) {
 }  // namespace
 
 std::string urdf_text_quirks(const std::string& xml, std::vector<std::string>& warnings) {
-  // A xacro element, not the namespace declaration that xacro leaves in the URDFs it expands.
-  if (xml.find("<xacro:") != std::string::npos) {
+  if (xml.find("<xacro:") !=
+      std::string::npos) {  // unexpanded macros (xmlns:xacro alone stays in expanded files)
     throw ModelError(
         "this is a xacro file, not a URDF: expand it first (xacro robot.urdf.xacro > robot.urdf; "
         "Debian 12 has no xacro package, pip has), or load xacro's output into "
