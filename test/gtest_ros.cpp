@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "se3_sim/ros/convert.h"
@@ -261,6 +262,40 @@ se3::SE3 joint_transform(const urdf::Joint& j, double q) {
 // Every URDF joint is one edge parent link -> child link (a tree: one parent per frame), fixed
 // joints on /tf_static and the rest (locked ones too) on /tf, each with the transform
 // robot_state_publisher computes from the joint's origin and position; world -> root on /tf.
+// Scene objects: a /tf frame each under the world, and markers of their shapes.
+TEST(Tf, SceneObjectsAsFramesAndMarkers) {
+  const se3::Scene sc = se3::parse_scene(
+      "objects:\n  - {name: crate, shape: {box: [0.1, 0.2, 0.3]}, mass: 1, color: [1, 0, 0]}\n"
+      "  - {name: pill, shape: {capsule: [0.05, 0.4]}}\n",
+      ".", "s.yaml");
+  std::vector<se3::ObjectState> states(2);
+  states[0].pose.p = se3::Vec3(1, 2, 3);
+  states[1].pose.p = se3::Vec3(0, 0, 1);
+  std::vector<geometry_msgs::TransformStamped> tfs(1);  // e.g. the robot's, kept
+  se3_ros::append_object_transforms(sc.objects, states, "world", ros::Time(2.0), tfs);
+  ASSERT_EQ(tfs.size(), 3u);
+  EXPECT_EQ(tfs[1].header.frame_id, "world");
+  EXPECT_EQ(tfs[1].child_frame_id, "crate");
+  EXPECT_DOUBLE_EQ(tfs[1].transform.translation.y, 2);
+  EXPECT_EQ(tfs[2].child_frame_id, "pill");
+  EXPECT_DOUBLE_EQ(tfs[2].header.stamp.toSec(), 2.0);
+  visualization_msgs::MarkerArray ma;
+  se3_ros::append_object_markers(sc.objects, states, "world", ros::Time(2.0), ma);
+  ASSERT_EQ(ma.markers.size(), 4u);  // a cube; a cylinder and two caps
+  EXPECT_EQ(ma.markers[0].type, visualization_msgs::Marker::CUBE);
+  EXPECT_EQ(ma.markers[0].ns, "objects");
+  EXPECT_DOUBLE_EQ(ma.markers[0].scale.z, 0.3);
+  EXPECT_FLOAT_EQ(ma.markers[0].color.r, 1.0f);
+  EXPECT_DOUBLE_EQ(ma.markers[0].pose.position.z, 3);
+  EXPECT_EQ(ma.markers[1].type, visualization_msgs::Marker::CYLINDER);
+  EXPECT_EQ(ma.markers[2].type, visualization_msgs::Marker::SPHERE);
+  EXPECT_NEAR(ma.markers[2].pose.position.z, 1 - 0.2, 1e-12);
+  EXPECT_NEAR(ma.markers[3].pose.position.z, 1 + 0.2, 1e-12);
+  std::set<int> ids;
+  for (const auto& m : ma.markers) ids.insert(m.id);
+  EXPECT_EQ(ids.size(), 4u);
+}
+
 TEST(Tf, TreeAsRobotStatePublisher) {
   for (const char* scene_file : {"satellite_arm.yaml", "quadruped_ground.yaml", "fixed_arm.yaml"}) {
     SCOPED_TRACE(scene_file);

@@ -8,7 +8,9 @@
 #include <set>
 #include <string>
 
+#include "se3_sim/collision.h"
 #include "se3_sim/dynamics.h"
+#include "se3_sim/render.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
@@ -104,7 +106,13 @@ TEST(SceneObjects, BlockListOfEveryShape) {
   ASSERT_TRUE(foot.shape.mesh);
   EXPECT_GT(foot.shape.mesh->triangle_count(), 10u);
   EXPECT_TRUE(foot.shape.scale.isApprox(Vec3(2, 2, 2)));
-  EXPECT_GT(foot.inertia.I(0, 0), 0);
+  // Its hull's inertia (scale 2: volume x 8), about the hull's centroid.
+  const ConvexHull h = convex_hull(*foot.shape.mesh, Vec3(2, 2, 2));
+  EXPECT_TRUE(foot.inertia.com().isApprox(h.centroid, 1e-12));
+  EXPECT_NEAR(foot.inertia.I(0, 0),
+              (h.inertia(0, 0) * 0.1 / h.volume) +
+                  0.1 * (h.centroid.y() * h.centroid.y() + h.centroid.z() * h.centroid.z()),
+              1e-15);
 
   EXPECT_TRUE(s.self_collision);
   EXPECT_DOUBLE_EQ(s.contact_margin, 0.02);
@@ -244,7 +252,9 @@ TEST(SceneCollision, FramesOfRobotAndObjects) {
       EXPECT_EQ(objs[i].group, 0);
       EXPECT_EQ(objs[i].frame, sc.body[i]);
     }
-    if (sc.scene_object[i] == 1) EXPECT_DOUBLE_EQ(objs[i].mu, 0.3);
+    if (sc.scene_object[i] == 1) {
+      EXPECT_DOUBLE_EQ(objs[i].mu, 0.3);
+    }
   }
   EXPECT_EQ(robot, scene_geometry(s, m).collisions.size());
   // Objects only: frames start at 0.
@@ -370,6 +380,83 @@ TEST(SceneCollision, SrdfNamingUnknownLinksIsOneLine) {
     EXPECT_EQ(w.find('\n'), std::string::npos) << w;
   }
   std::remove(path.c_str());
+}
+
+// The renderer draws the scene's objects (world-fixed geometry at their poses).
+TEST(SceneObjectsPresentation, RendererDrawsObjects) {
+  const Scene s = parse_scene(
+      "objects:\n  - {name: crate, shape: {box: [0.4, 0.4, 0.4]}, color: [1, 0, 0],"
+      " pose: {position: [1, 0, 0.5]}}\n"
+      "  - {name: ball, shape: {sphere: 0.2}, mass: 1, pose: {position: [-1, 0, 0.5]}}\n",
+      kData, "s.yaml");
+  const Model m = make_chain(1, false, {1.0}, 0.3);
+  GeometryModel g;
+  g.visuals = scene_object_geometry(s.objects,
+                                    {s.objects[0].pose, SE3(Mat3::Identity(), Vec3(-1, 0, 0.8))});
+  ASSERT_EQ(g.visuals.size(), 2u);
+  EXPECT_EQ(g.visuals[0].body, GeometryObject::kWorld);
+  EXPECT_EQ(g.visuals[0].name, "crate");
+  const auto items = render::make_draw_items(m, g);
+  ASSERT_EQ(items.size(), 2u);
+  render::Camera c;
+  c.eye = Vec3(0, -4, 0.5);
+  c.target = Vec3(0, 0, 0.5);
+  c.update();
+  render::Renderer r(c);
+  r.style().grid = false;
+  r.style().overlay = false;
+  r.set_items(items);
+  Data d(m);
+  forward_kinematics(m, d, SE3(), VecX::Zero(m.nq));
+  r.render(d.oMb);
+  for (const Vec3& p : {Vec3(1, 0, 0.5), Vec3(-1, 0, 0.8)}) {  // the centres: drawn
+    render::Vec2 px;
+    ASSERT_TRUE(c.project(p, px));
+    EXPECT_NE(r.framebuffer().pixel(int(px.x()), int(px.y())),
+              r.background(int(px.x()), int(px.y())))
+        << p.transpose();
+  }
+  render::Vec2 px;
+  ASSERT_TRUE(c.project(Vec3(-1, 0, 0.45), px));  // where the ball starts, not where it is
+  EXPECT_EQ(r.framebuffer().pixel(int(px.x()), int(px.y())),
+            r.background(int(px.x()), int(px.y())));
+}
+
+TEST(SceneObjectsPresentation, SimulateJsonReportsObjectsAndPenetration) {
+  const std::string path = testing::TempDir() + "/drop.yaml";
+  {
+    std::ofstream out(path);
+    out << "ground: true\ndt: 0.001\nobjects:\n"
+           "  - {name: ball, shape: {sphere: 0.1}, mass: 1, pose: {position: [0, 0, 0.3]},"
+           " twist: [0, 0, 0, 0.5, 0, 0]}\n"
+           "  - {name: post, shape: {box: [0.1, 0.1, 1]}, pose: {position: [5, 0, 0.5]}}\n";
+  }
+  SimulateOptions o;
+  o.scene = path;
+  o.duration = 0.1;
+  const SimulateResult r = simulate_headless(o);
+  ASSERT_EQ(r.objects.size(), 2u);
+  EXPECT_EQ(r.objects[0].name, "ball");
+  // In flight for 0.1 s: x = 0.05 (body-frame v = world v, no rotation), z = 0.3 - g t^2 / 2.
+  EXPECT_NEAR(r.objects[0].pose.p.x(), 0.05, 1e-3);
+  EXPECT_NEAR(r.objects[0].pose.p.z(), 0.3 - 9.81 * 0.01 / 2, 2e-3);
+  EXPECT_TRUE(r.objects[1].pose.p.isApprox(Vec3(5, 0, 0.5)));
+  EXPECT_TRUE(std::isfinite(r.penetration_max));
+  EXPECT_GE(r.penetration_max, 0);
+  const std::string j = simulate_result_json(r);
+  EXPECT_NE(j.find("\"penetration_max\": "), std::string::npos) << j;
+  EXPECT_NE(j.find("\"objects\": {\"ball\": {\"position\": ["), std::string::npos) << j;
+  EXPECT_NE(j.find("\"orientation\": [0, 0, 0, 1]"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"twist\": ["), std::string::npos) << j;
+  EXPECT_NE(j.find("\"post\": {"), std::string::npos) << j;
+  std::remove(path.c_str());
+  // No contact at all: null.
+  SimulateOptions c;
+  c.model = "chain:2";
+  c.duration = 0.01;
+  const std::string jc = simulate_result_json(simulate_headless(c));
+  EXPECT_NE(jc.find("\"penetration_max\": null"), std::string::npos) << jc;
+  EXPECT_EQ(jc.find("\"objects\""), std::string::npos) << jc;
 }
 
 int main(int argc, char** argv) {

@@ -49,4 +49,10 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
 void scene_frame_poses(const std::vector<SE3>& body_poses,
                        const std::vector<SE3>& free_object_poses, std::vector<SE3>& frames);
 
+/// The scene objects as geometry the renderer draws (geometry.h): one GeometryObject each, body
+/// GeometryObject::kWorld, placement = its pose (poses[j] when given, one per object; else the
+/// scene's initial pose), its shape and colour; name and link are the object's name.
+std::vector<GeometryObject> scene_object_geometry(const std::vector<SceneObject>& objects,
+                                                  const std::vector<SE3>& poses = {});
+
 }  // namespace se3

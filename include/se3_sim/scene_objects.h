@@ -29,7 +29,8 @@ struct SceneObject {
 };
 
 /// Rotational inertia about the centre of a uniform solid `shape` of `mass`: box, sphere,
-/// cylinder and capsule (axis z) exactly; a mesh as its scaled axis-aligned bounding box.
+/// cylinder and capsule (axis z) exactly; a mesh as its scaled axis-aligned bounding box (the
+/// scene reader gives mesh objects their convex hull's inertia instead, collision.h).
 Mat3 uniform_density_inertia(const Shape& shape, double mass);
 
 }  // namespace se3

@@ -467,6 +467,17 @@ struct SimulateResult {
   /// The run was stopped at SimulateOptions::max_body_steps (adaptive internal steps).
   bool stopped = false;
   std::string status;  ///< why the run ended early ("" when it completed)
+  /// Scenes with objects: every object's final state (Scene::objects order), for the JSON's
+  /// "objects" key (twist in the object's frame).
+  struct FinalObject {
+    std::string name;
+    SE3 pose;
+    Vec6 twist = Vec6::Zero();
+  };
+  std::vector<FinalObject> objects;
+  /// Deepest contact penetration over the run (m), Simulator::penetration_max(); NaN (null) for
+  /// a scene without contact (no objects, no ground, no contact points).
+  double penetration_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Runs a scene or model headless with zero commanded torques (a model and a scene together: the
@@ -474,8 +485,10 @@ struct SimulateResult {
 /// bad input, and on a run beyond limits::kMaxSteps or kMaxBodySteps (refused before anything is
 /// built or stepped); a divergence ends the run early with diverged = true.
 SimulateResult simulate_headless(const SimulateOptions& options);
-/// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null), and
-/// "diverged" (true/false) and "status" (why the run ended early, or null).
+/// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null),
+/// "penetration_max", "objects" (scenes with objects: {"NAME": {"position": [x,y,z],
+/// "orientation": [x,y,z,w], "twist": [wx,wy,wz,vx,vy,vz]}}), and "diverged" (true/false) and
+/// "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);
 
 }  // namespace se3

@@ -150,7 +150,9 @@ std::vector<DrawItem> make_draw_items(const Model& model, const GeometryModel& g
            std::shared_ptr<const RenderMesh>>
       shared;
   for (const GeometryObject& o : geometry.visuals) {
-    if (o.body < 0 || o.body >= nb || !finite_pose(o.placement)) continue;
+    // Body kWorld: fixed in the world (scene objects), placement in the world.
+    const bool world = o.body == GeometryObject::kWorld;
+    if ((!world && (o.body < 0 || o.body >= nb)) || !finite_pose(o.placement)) continue;
     DrawItem it;
     it.body = o.body;
     it.local = o.placement;
@@ -223,9 +225,12 @@ void frame_items(const std::vector<DrawItem>& items, const std::vector<SE3>& oMb
     ++cnt;
   };
   for (const DrawItem& it : items) {
-    if (it.body < 0 || it.body >= int(oMb.size()) || !it.mesh) continue;
-    if (!finite_pose(oMb[it.body])) continue;
-    const SE3 pose = oMb[it.body] * it.local;
+    if (!it.mesh) continue;
+    const bool world = it.body == GeometryObject::kWorld;
+    if (!world && (it.body < 0 || it.body >= int(oMb.size()) || !finite_pose(oMb[it.body]))) {
+      continue;
+    }
+    const SE3 pose = world ? it.local : oMb[it.body] * it.local;
     const Eigen::Vector3d l = it.mesh->lower.cast<double>(), u = it.mesh->upper.cast<double>();
     for (int c = 0; c < 8; ++c) {
       add(pose.act(

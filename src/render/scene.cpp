@@ -413,9 +413,12 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
     f.vbase = vbase;
     if (!it.mesh) continue;
     vbase += it.mesh->vertex_count();
-    if (it.body < 0 || it.body >= int(oMb.size()) || !finite_pose(oMb[it.body])) continue;
-    if (I.prepare(*it.mesh, oMb[it.body] * it.local, Vec3::Ones(), cam_, planes_, style_.light,
-                  f.vbase, f)) {
+    const bool world = it.body == GeometryObject::kWorld;  // fixed in the world
+    if (!world && (it.body < 0 || it.body >= int(oMb.size()) || !finite_pose(oMb[it.body]))) {
+      continue;
+    }
+    if (I.prepare(*it.mesh, world ? it.local : oMb[it.body] * it.local, Vec3::Ones(), cam_, planes_,
+                  style_.light, f.vbase, f)) {
       I.next_dirty.add(f.rect);
     }
   }

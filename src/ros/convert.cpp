@@ -1,6 +1,7 @@
 // Library <-> ROS message conversions and the checks of incoming commands (convert.h).
 #include "se3_sim/ros/convert.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -210,6 +211,83 @@ std::vector<geometry_msgs::TransformStamped> tf_static_transforms(const se3::Mod
     out.push_back(stamped(P.name, L.name, P.offset.inverse() * L.offset, stamp));
   }
   return out;
+}
+
+void append_object_transforms(const std::vector<se3::SceneObject>& specs,
+                              const std::vector<se3::ObjectState>& states,
+                              const std::string& world_frame, const ros::Time& stamp,
+                              std::vector<geometry_msgs::TransformStamped>& out) {
+  const std::size_t n = std::min(specs.size(), states.size());
+  for (std::size_t j = 0; j < n; ++j) {
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = stamp;
+    t.header.frame_id = world_frame;
+    t.child_frame_id = specs[j].name;
+    t.transform = to_transform(states[j].pose);
+    out.push_back(std::move(t));
+  }
+}
+
+void append_object_markers(const std::vector<se3::SceneObject>& specs,
+                           const std::vector<se3::ObjectState>& states,
+                           const std::string& world_frame, const ros::Time& stamp,
+                           visualization_msgs::MarkerArray& out) {
+  const std::size_t n = std::min(specs.size(), states.size());
+  for (std::size_t j = 0; j < n; ++j) {
+    const se3::SceneObject& o = specs[j];
+    const se3::Shape& s = o.shape;
+    visualization_msgs::Marker mk;
+    mk.header.stamp = stamp;
+    mk.header.frame_id = world_frame;
+    mk.ns = "objects";
+    mk.id = int(3 * j);
+    mk.action = visualization_msgs::Marker::ADD;
+    mk.pose = to_pose(states[j].pose);
+    const se3::Vec4f c = o.material.has_color ? o.material.rgba : se3::Vec4f(0.7f, 0.7f, 0.7f, 1.f);
+    mk.color.r = c[0];
+    mk.color.g = c[1];
+    mk.color.b = c[2];
+    mk.color.a = c[3];
+    switch (s.type) {
+      case se3::ShapeType::Box:
+        mk.type = visualization_msgs::Marker::CUBE;
+        mk.scale.x = s.box.x();
+        mk.scale.y = s.box.y();
+        mk.scale.z = s.box.z();
+        break;
+      case se3::ShapeType::Sphere:
+        mk.type = visualization_msgs::Marker::SPHERE;
+        mk.scale.x = mk.scale.y = mk.scale.z = 2 * s.radius;
+        break;
+      case se3::ShapeType::Cylinder:
+      case se3::ShapeType::Capsule:
+        mk.type = visualization_msgs::Marker::CYLINDER;
+        mk.scale.x = mk.scale.y = 2 * s.radius;
+        mk.scale.z = s.length;
+        break;
+      case se3::ShapeType::Mesh:
+        mk.type = visualization_msgs::Marker::MESH_RESOURCE;
+        mk.mesh_resource = s.path.empty() ? s.resource : "file://" + s.path;
+        mk.mesh_use_embedded_materials = !o.material.has_color;
+        mk.scale.x = s.scale.x();
+        mk.scale.y = s.scale.y();
+        mk.scale.z = s.scale.z();
+        break;
+    }
+    out.markers.push_back(mk);
+    if (s.type == se3::ShapeType::Capsule) {  // the two caps
+      for (int end = 0; end < 2; ++end) {
+        visualization_msgs::Marker cap = mk;
+        cap.id = int(3 * j) + 1 + end;
+        cap.type = visualization_msgs::Marker::SPHERE;
+        cap.scale.x = cap.scale.y = cap.scale.z = 2 * s.radius;
+        const se3::SE3& P = states[j].pose;
+        cap.pose =
+            to_pose(se3::SE3(P.R, P.p + (end ? 0.5 : -0.5) * s.length * se3::Vec3(P.R.col(2))));
+        out.markers.push_back(cap);
+      }
+    }
+  }
 }
 
 }  // namespace se3_ros

@@ -316,6 +316,14 @@ void SimulatorNodeImpl::configure() {
   joints_ = joint_table(m, scene_.locked_joints);
   tree_ = tf_tree(m, world_frame_);
   setup_controllers();
+  // The scene's objects (free and static; make_simulator set them and their contact): on /tf
+  // (a frame each, parent the world) and on sim_markers (namespace objects).
+  for (const se3::SceneObject& o : scene_.objects) {
+    if (m.link_index(o.name) >= 0 || o.name == world_frame_) {
+      throw std::runtime_error("scene object '" + o.name +
+                               "' has the name of a robot link or of the world frame");
+    }
+  }
   const se3::Vec3 g = m.gravity;
   ROS_INFO(
       "simulator: %s (%s), scene %s: %d joints, %s base, gravity [%g %g %g], joint limits %s, "
@@ -843,6 +851,7 @@ void SimulatorNodeImpl::publish_state() {
   js_.header.stamp = t;
   sim_->link_poses(links_);
   tf_transforms(m, tree_, links_, world_frame_, t, tfs_);
+  append_object_transforms(sim_->object_specs(), sim_->objects(), world_frame_, t, tfs_);
   fill_chain_state(m, js_, x, sim_->kinetic_energy(), sim_->potential_energy(), cs_);
   cs_.header.stamp = t;
   cs_.header.frame_id = world_frame_;
@@ -897,6 +906,7 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   com.color.g = 0.8;
   com.color.a = 1.0;
   markers.markers.push_back(com);
+  append_object_markers(sim_->object_specs(), sim_->objects(), world_frame_, t, markers);
   if (scene_.has_base_visual) {  // the scene's box on the base link (e.g. a satellite bus)
     visualization_msgs::Marker bus;
     bus.header = com.header;

@@ -193,6 +193,12 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     r.momentum_drift_rel = h0.norm() > 0 ? dh / h0.norm() : dh;
     r.com_drift_max = dc;
   }
+  const bool contact = !scene.objects.empty() || spec.ground || !spec.contacts.empty();
+  if (contact) r.penetration_max = sim.penetration_max();
+  for (std::size_t j = 0; j < sim.object_specs().size() && j < sim.objects().size(); ++j) {
+    r.objects.push_back(
+        {sim.object_specs()[j].name, sim.objects()[j].pose, sim.objects()[j].twist});
+  }
   return r;
 }
 
@@ -227,7 +233,24 @@ std::string simulate_result_json(const SimulateResult& r) {
     << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max)
-    << ", \"diverged\": " << (r.diverged ? "true" : "false")
+    << ", \"penetration_max\": " << num(r.penetration_max);
+  if (!r.objects.empty()) {
+    auto list = [&](const double* v, int n) {
+      std::string out = "[";
+      for (int k = 0; k < n; ++k) out += (k ? ", " : "") + num(v[k]);
+      return out + "]";
+    };
+    o << ", \"objects\": {";
+    for (std::size_t j = 0; j < r.objects.size(); ++j) {
+      const SimulateResult::FinalObject& ob = r.objects[j];
+      const Eigen::Vector4d q = quaternion_from_rotation(ob.pose.R);
+      o << (j ? ", " : "") << text(ob.name) << ": {\"position\": " << list(ob.pose.p.data(), 3)
+        << ", \"orientation\": " << list(q.data(), 4) << ", \"twist\": " << list(ob.twist.data(), 6)
+        << "}";
+    }
+    o << "}";
+  }
+  o << ", \"diverged\": " << (r.diverged ? "true" : "false")
     << ", \"status\": " << (r.status.empty() ? std::string("null") : text(r.status)) << "}";
   return o.str();
 }

@@ -170,4 +170,20 @@ void scene_frame_poses(const std::vector<SE3>& body_poses,
             frames.begin() + long(body_poses.size()));
 }
 
+std::vector<GeometryObject> scene_object_geometry(const std::vector<SceneObject>& objects,
+                                                  const std::vector<SE3>& poses) {
+  std::vector<GeometryObject> out;
+  for (std::size_t j = 0; j < objects.size(); ++j) {
+    GeometryObject g;
+    g.name = objects[j].name;
+    g.link = objects[j].name;
+    g.body = GeometryObject::kWorld;
+    g.placement = j < poses.size() ? poses[j] : objects[j].pose;
+    g.shape = objects[j].shape;
+    g.material = objects[j].material;
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
 }  // namespace se3

@@ -14,8 +14,8 @@
 //   srdf: data/robots/panda.srdf             # relative to the scene file
 //   self_collision: false
 //   contact: {margin: 0.01, max_contacts_per_pair: 4}
-// The default inertia is that of the shape at uniform density; a mesh's is that of its
-// axis-aligned bounding box (scaled), centred on the object's frame.
+// The default inertia is that of the shape at uniform density; a mesh's is that of its convex
+// hull (the shape it collides as), about the hull's centroid.
 #include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
@@ -24,6 +24,7 @@
 #include <unordered_set>
 
 #include "scene_objects_reader.h"
+#include "se3_sim/collision.h"
 
 namespace se3 {
 namespace {
@@ -236,8 +237,20 @@ SceneObject read_object(const SceneReader& r, const Field& item, const std::stri
       r.fail(*twist, "'" + twist->key + "' needs a mass (a static object does not move)");
     }
   } else {
-    const Mat3 Ic = inertia ? read_inertia(r, *inertia) : shape_inertia(o.shape, o.mass);
-    o.inertia = Inertia::from_com(o.mass, Vec3::Zero(), Ic);
+    if (inertia) {
+      o.inertia = Inertia::from_com(o.mass, Vec3::Zero(), read_inertia(r, *inertia));
+    } else if (o.shape.type == ShapeType::Mesh) {
+      // The convex hull as a uniform solid (the shape it collides as): its centroid may lie
+      // off the mesh's origin, the object's frame.
+      try {
+        const ConvexHull h = convex_hull(*o.shape.mesh, o.shape.scale, o.name);
+        o.inertia = Inertia::from_com(o.mass, h.centroid, h.inertia * (o.mass / h.volume));
+      } catch (const std::invalid_argument& e) {
+        r.fail(item, "'" + item.key + "': " + e.what());
+      }
+    } else {
+      o.inertia = Inertia::from_com(o.mass, Vec3::Zero(), shape_inertia(o.shape, o.mass));
+    }
   }
   return o;
 }

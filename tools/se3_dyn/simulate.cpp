@@ -5,6 +5,7 @@
 
 #include "cli.h"
 #include "se3_sim/render.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3_dyn {
@@ -87,6 +88,9 @@ int cmd_render(int argc, char** argv) {
     const se3::Scene scene = se3::load_scene(args.get("scene"));
     model = se3::scene_model(scene);
     geometry = se3::scene_geometry(scene, model, "", gopt);
+    for (se3::GeometryObject& g : se3::scene_object_geometry(scene.objects)) {  // at their poses
+      geometry.visuals.push_back(std::move(g));
+    }
     const se3::State s = se3::scene_state(scene, model);
     opt.base = s.base;
     opt.q = s.q;

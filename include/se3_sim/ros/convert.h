@@ -8,6 +8,7 @@
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/Wrench.h>
 #include <sensor_msgs/JointState.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@
 #include "se3_sim/ChainState.h"
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/dynamics.h"
+#include "se3_sim/sim.h"
 
 namespace se3_ros {
 
@@ -82,5 +84,19 @@ void tf_transforms(const se3::Model& m, const TfTree& tree, const std::vector<se
 std::vector<geometry_msgs::TransformStamped> tf_static_transforms(const se3::Model& m,
                                                                   const TfTree& tree,
                                                                   const ros::Time& stamp);
+
+/// Appends one /tf transform per scene object (world_frame -> the object's name) at its state.
+/// Reuses out's storage past its first size on later calls.
+void append_object_transforms(const std::vector<se3::SceneObject>& specs,
+                              const std::vector<se3::ObjectState>& states,
+                              const std::string& world_frame, const ros::Time& stamp,
+                              std::vector<geometry_msgs::TransformStamped>& out);
+/// Appends the scene objects as markers (namespace "objects", in world_frame): CUBE, SPHERE,
+/// CYLINDER, a capsule as a cylinder and two spheres, a mesh as MESH_RESOURCE (file://), in the
+/// object's colour.
+void append_object_markers(const std::vector<se3::SceneObject>& specs,
+                           const std::vector<se3::ObjectState>& states,
+                           const std::string& world_frame, const ros::Time& stamp,
+                           visualization_msgs::MarkerArray& out);
 
 }  // namespace se3_ros
