@@ -1,7 +1,7 @@
-// The library's layers depend one way (docs/design.md, "Layers"): no header or source file of a layer
-// includes a header of a layer above it or beside it. Read from the sources, so that an upward
-// include fails here before it becomes a cycle. render depends on dynamics as well (it poses the
-// robot at joint positions q by forward kinematics, which docs/design.md puts in dynamics).
+// The library's layers depend one way (docs/design.md, "Layers"): no header or source file of a
+// layer includes a header of a layer above it or beside it. Read from the sources, so that an
+// upward include fails here before it becomes a cycle. render depends on dynamics as well (it poses
+// the robot at joint positions q by forward kinematics, which docs/design.md puts in dynamics).
 #include <gtest/gtest.h>
 
 #include <filesystem>

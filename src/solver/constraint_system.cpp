@@ -521,7 +521,15 @@ void ConstraintSystem::ground_contacts() {
 }
 
 void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in) {
-  kinematics(x.base, x.q, nullptr);
+  // Joint-limit rows need no kinematics (their Jacobian is +-1 on the joint's column): a robot
+  // with limits alone steps without a forward-kinematics pass (minv makes one when a row is in).
+  const bool need_kinematics =
+      nb_ > 0 || spec_.ground || !free_.empty() || (in.contacts && !in.contacts->empty());
+  if (need_kinematics) {
+    kinematics(x.base, x.q, nullptr);
+  } else {
+    bind();
+  }
   for (size_t j = 0; j < free_.size(); ++j) {
     free_[j].pose[0] = (*in.bodies)[j].base;
     free_[j].kin.update_world_axes();
@@ -715,8 +723,8 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
 void ConstraintSystem::finish_velocity_step(State& x) {
   const Model& m = model_;
   if (opt_.project && nb_ > 0) project(x);
-  // Errors at the end of the step.
-  kinematics(x.base, x.q, nullptr);
+  // Errors at the end of the step (kinematics only for what needs positions).
+  if (nb_ > 0 || spec_.ground) kinematics(x.base, x.q, nullptr);
   report_.penetration = 0;
   const Vec3& nrm = spec_.ground_normal;
   for (size_t k = 0; spec_.ground && k < contacts_.size(); ++k) {
