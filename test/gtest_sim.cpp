@@ -118,6 +118,34 @@ TEST(Scene, RelativeRobotPathsResolveAgainstTheSceneOrThePackage) {
   EXPECT_EQ(scene_model(c).n, 3);
 }
 
+// Files named the ROS way: $(find PKG)/..., package://PKG/... (PKG's folder on ROS_PACKAGE_PATH)
+// and file:///...; an unknown package is one line naming the key and the package.
+TEST(Scene, RosStyleReferencesToRobotsAndSrdfs) {
+  const std::string src = SE3_SIM_SOURCE_DIR;
+  setenv("ROS_PACKAGE_PATH", src.c_str(), 1);
+  const std::string ur5 = src + "/data/robots/ur5_robot.urdf";
+  for (const std::string& robot :
+       {std::string("$(find se3_sim)/data/robots/ur5_robot.urdf"),
+        std::string("package://se3_sim/data/robots/ur5_robot.urdf"), "file://" + ur5}) {
+    const Scene s = parse_scene("robot: \"" + robot + "\"\nbase: fixed\n", "/nonexistent");
+    EXPECT_EQ(s.robot_path.substr(s.robot_path.size() - 14), "ur5_robot.urdf") << robot;
+    EXPECT_TRUE(std::ifstream(s.robot_path).good()) << s.robot_path;
+  }
+  const Scene with_srdf = parse_scene(
+      "srdf: \"$(find se3_sim)/data/meshes/example-robot-data/robots/ur_description/srdf/"
+      "ur5.srdf\"\n",
+      "/nonexistent");
+  EXPECT_TRUE(std::ifstream(with_srdf.srdf).good()) << with_srdf.srdf;
+  try {
+    parse_scene("robot: \"$(find no_such_package_here)/r.urdf\"\n", "/nonexistent", "x.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("x.yaml"), std::string::npos) << m;
+    EXPECT_NE(m.find("no_such_package_here"), std::string::npos) << m;
+  }
+}
+
 TEST(Scene, MalformedScenesAreRefusedWithTheLine) {
   EXPECT_NE(scene_error("robot: chain:2\nbsae: free\n").find("test.yaml:2: unknown key 'bsae'"),
             std::string::npos)

@@ -81,8 +81,8 @@ struct Builder {
       throw ModelError("link '" + link.name + "': its frame name '" + name +
                        "' is another link's (a leading '/' is stripped, as tf2 does)");
     }
-    m.links.push_back({name, body, O, parent, j ? j->name : std::string(),
-                       j && j->type == urdf::Joint::FIXED});
+    m.links.push_back(
+        {name, body, O, parent, j ? j->name : std::string(), j && j->type == urdf::Joint::FIXED});
     if (link.inertial) add_inertial(link, body, O);
   }
 

@@ -227,6 +227,11 @@ std::string resolve_robot(const Scene& s, const std::string& base_dir) {
     }
     return s.robot;
   }
+  std::string ros_file, ros_error;
+  if (scene_ros_reference(s.robot, base_dir, &ros_file, &ros_error)) {
+    if (ros_file.empty()) throw SceneError(s.file + ": robot '" + s.robot + "': " + ros_error);
+    return ros_file;
+  }
   if (s.robot[0] == '/') {
     if (!file_exists(s.robot)) {
       throw SceneError(s.file + ": robot file '" + s.robot + "' not found");

@@ -117,7 +117,13 @@ Shape read_shape(const SceneReader& r, const Field& v, const std::string& base_d
     return k == "cylinder" ? make_cylinder(rl[0], rl[1]) : make_capsule(rl[0], rl[1]);
   }
   // mesh
-  const std::string uri = r.text(*kind);
+  std::string uri = r.text(*kind);
+  if (uri.compare(0, 7, "$(find ") == 0) {  // as package:// (scene_reader.h)
+    std::string file, error;
+    scene_ros_reference(uri, base_dir, &file, &error);
+    if (file.empty()) r.fail(*kind, "'" + kind->key + "': " + error);
+    uri = file;
+  }
   Vec3 sc = Vec3::Ones();
   if (scale) {
     sc = r.vec3(*scale);
@@ -272,6 +278,11 @@ void read_scene_objects(const SceneReader& r, const Field& v, const std::string&
 
 std::string read_scene_srdf(const SceneReader& r, const Field& v, const std::string& base_dir) {
   const std::string p = r.text(v);
+  std::string ros_file, ros_error;
+  if (scene_ros_reference(p, base_dir, &ros_file, &ros_error)) {
+    if (ros_file.empty()) r.fail(v, "'srdf' '" + p + "': " + ros_error);
+    return ros_file;
+  }
   const std::string full = p[0] == '/' ? p : base_dir + "/" + p;
   if (!regular_file(full)) r.fail(v, "'srdf' file '" + full + "' not found");
   return full;

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 
 namespace se3 {
@@ -520,6 +521,28 @@ std::vector<std::pair<std::string, double>> SceneReader::joint_map(const Field& 
   if (!is_null(f) && !f.node.IsMap()) fail(f, where(f) + " needs a map {joint: value, ...}");
   for (const Field& j : fields(f, {}, true)) out.emplace_back(j.name, number(j));
   return out;
+}
+
+bool scene_ros_reference(const std::string& written, const std::string& base_dir, std::string* out,
+                         std::string* error) {
+  std::string uri = written;
+  if (written.compare(0, 7, "$(find ") == 0) {  // roslaunch's substitution: $(find PKG)/rest
+    const std::size_t close = written.find(')');
+    if (close == std::string::npos) {
+      *out = "";
+      *error = "'" + written + "' has no ')' after $(find PKG";
+      return true;
+    }
+    std::string pkg = written.substr(7, close - 7);
+    while (!pkg.empty() && pkg.back() == ' ') pkg.pop_back();
+    uri = "package://" + pkg + written.substr(close + 1);
+  } else if (written.compare(0, 10, "package://") != 0 && written.compare(0, 7, "file://") != 0) {
+    return false;
+  }
+  ResourcePaths paths;
+  paths.base_dir = base_dir;
+  *out = resolve_resource(uri, paths, error);
+  return true;
 }
 
 }  // namespace se3

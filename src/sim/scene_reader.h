@@ -43,6 +43,13 @@ SceneTextShape scene_text_shape(const std::string& text);
 /// CR alone as text).
 std::string with_lf_line_ends(const std::string& text);
 
+/// A file a scene names the ROS way: `package://PKG/path` and `$(find PKG)/path` (the folder of
+/// PKG on ROS_PACKAGE_PATH), or `file:///abs/path`. Returns false for any other text (a plain
+/// path: the caller's relative rules apply); otherwise the file in *out, or "" and a one-line
+/// reason in *error when it cannot be found.
+bool scene_ros_reference(const std::string& written, const std::string& base_dir, std::string* out,
+                         std::string* error);
+
 class SceneReader {
  public:
   /// One value of the scene: its key path for messages, the YAML node and its line.
