@@ -21,20 +21,20 @@ namespace {
 std::pair<int, std::size_t> yaml_depth_and_nodes(const YAML::Node& root) {
   int deepest = 0;
   std::size_t nodes = 0;
-  std::vector<std::pair<YAML::Node, int>> todo = {{root, 0}};
-  while (!todo.empty() && nodes < 10 * se3::limits::kMaxYamlItems) {
-    const auto [n, depth] = todo.back();
-    todo.pop_back();
+  std::vector<std::pair<YAML::Node, int>> pending = {{root, 0}};
+  while (!pending.empty() && nodes < 10 * se3::limits::kMaxYamlItems) {
+    const auto [n, depth] = pending.back();
+    pending.pop_back();
     ++nodes;
     if (!n.IsMap() && !n.IsSequence()) continue;
     const int d = depth + 1;
     if (d > deepest) deepest = d;
     for (const auto& c : n) {
       if (n.IsMap()) {
-        todo.push_back({c.first, d});
-        todo.push_back({c.second, d});
+        pending.push_back({c.first, d});
+        pending.push_back({c.second, d});
       } else {
-        todo.push_back({YAML::Node(c), d});
+        pending.push_back({YAML::Node(c), d});
       }
     }
   }

@@ -21,14 +21,14 @@ namespace {
 // Deepest element nesting of a tinyxml document, without recursion.
 int tinyxml_depth(const TiXmlNode* root) {
   int deepest = 0;
-  std::vector<std::pair<const TiXmlNode*, int>> todo = {{root, 0}};
-  while (!todo.empty()) {
-    const auto [node, depth] = todo.back();
-    todo.pop_back();
+  std::vector<std::pair<const TiXmlNode*, int>> pending = {{root, 0}};
+  while (!pending.empty()) {
+    const auto [node, depth] = pending.back();
+    pending.pop_back();
     for (const TiXmlNode* c = node->FirstChild(); c; c = c->NextSibling()) {
       const int d = depth + (c->Type() == TiXmlNode::TINYXML_ELEMENT ? 1 : 0);
       if (d > deepest) deepest = d;
-      todo.push_back({c, d});
+      pending.push_back({c, d});
     }
   }
   return deepest;

@@ -36,8 +36,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/ros/renderer_convert.h"
 #include "se3_sim/render.h"
+#include "se3_sim/ros/renderer_convert.h"
 
 namespace {
 

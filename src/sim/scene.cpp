@@ -92,25 +92,7 @@ void read_base_inertia(const SceneReader& r, const Field& v, Scene& s) {
     } else if (p.name == "com") {
       s.base_com = r.vec3(p);
     } else {
-      const auto I = r.numbers(p, 3, 6);
-      if (I.size() != 3 && I.size() != 6) {
-        r.fail(p, "base_inertia.inertia needs [ixx, iyy, izz] or six values");
-      }
-      Mat3 M = Mat3::Zero();
-      M(0, 0) = I[0];
-      M(1, 1) = I[1];
-      M(2, 2) = I[2];
-      if (I.size() == 6) {
-        M(0, 1) = M(1, 0) = I[3];
-        M(0, 2) = M(2, 0) = I[4];
-        M(1, 2) = M(2, 1) = I[5];
-      }
-      const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
-      const Vec3 ev = es.eigenvalues();
-      if (!(ev.minCoeff() > 0) || ev[0] + ev[1] < ev[2] * (1 - 1e-9)) {
-        r.fail(p, "base_inertia.inertia is not a physical inertia");
-      }
-      s.base_inertia = M;
+      s.base_inertia = read_inertia(r, p);  // scene_objects_reader.h
     }
   }
   if (!(s.base_mass > 0)) r.fail(v, "base_inertia needs a mass");

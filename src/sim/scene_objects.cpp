@@ -142,40 +142,6 @@ Shape read_shape(const SceneReader& r, const Field& v, const std::string& base_d
   return s;
 }
 
-Mat3 read_inertia(const SceneReader& r, const Field& f) {
-  Mat3 M = Mat3::Zero();
-  if (f.node.IsSequence() && f.node.size() == 3 && f.node[0].IsSequence()) {
-    int i = 0;
-    for (const Field& row : r.items(f, 3)) {
-      const auto v = r.numbers(row, 3, 3);
-      for (int j = 0; j < 3; ++j) M(i, j) = v[j];
-      ++i;
-    }
-    if (!(M - M.transpose()).isZero(1e-12 * (1 + M.cwiseAbs().maxCoeff()))) {
-      r.fail(f, "'" + f.key + "' is not symmetric");
-    }
-  } else {
-    const auto I = r.numbers(f, 3, 6);
-    if (I.size() != 3 && I.size() != 6) {
-      r.fail(f, "'" + f.key + "' needs [ixx, iyy, izz], six values or a 3x3 list");
-    }
-    M(0, 0) = I[0];
-    M(1, 1) = I[1];
-    M(2, 2) = I[2];
-    if (I.size() == 6) {
-      M(0, 1) = M(1, 0) = I[3];
-      M(0, 2) = M(2, 0) = I[4];
-      M(1, 2) = M(2, 1) = I[5];
-    }
-  }
-  const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
-  const Vec3 ev = es.eigenvalues();
-  if (!(ev.minCoeff() > 0) || ev[0] + ev[1] < ev[2] * (1 - 1e-9)) {
-    r.fail(f, "'" + f.key + "' is not a physical inertia (positive, triangle inequality)");
-  }
-  return M;
-}
-
 SceneObject read_object(const SceneReader& r, const Field& item, const std::string& base_dir) {
   SceneObject o;
   o.line = item.line;
@@ -286,6 +252,40 @@ std::string read_scene_srdf(const SceneReader& r, const Field& v, const std::str
   const std::string full = p[0] == '/' ? p : base_dir + "/" + p;
   if (!regular_file(full)) r.fail(v, "'srdf' file '" + full + "' not found");
   return full;
+}
+
+Mat3 read_inertia(const SceneReader& r, const SceneReader::Field& f) {
+  Mat3 M = Mat3::Zero();
+  if (f.node.IsSequence() && f.node.size() == 3 && f.node[0].IsSequence()) {
+    int i = 0;
+    for (const Field& row : r.items(f, 3)) {
+      const auto v = r.numbers(row, 3, 3);
+      for (int j = 0; j < 3; ++j) M(i, j) = v[j];
+      ++i;
+    }
+    if (!(M - M.transpose()).isZero(1e-12 * (1 + M.cwiseAbs().maxCoeff()))) {
+      r.fail(f, "'" + f.key + "' is not symmetric");
+    }
+  } else {
+    const auto I = r.numbers(f, 3, 6);
+    if (I.size() != 3 && I.size() != 6) {
+      r.fail(f, "'" + f.key + "' needs [ixx, iyy, izz], six values or a 3x3 list");
+    }
+    M(0, 0) = I[0];
+    M(1, 1) = I[1];
+    M(2, 2) = I[2];
+    if (I.size() == 6) {
+      M(0, 1) = M(1, 0) = I[3];
+      M(0, 2) = M(2, 0) = I[4];
+      M(1, 2) = M(2, 1) = I[5];
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
+  const Vec3 ev = es.eigenvalues();
+  if (!(ev.minCoeff() > 0) || ev[0] + ev[1] < ev[2] * (1 - 1e-9)) {
+    r.fail(f, "'" + f.key + "' is not a physical inertia (positive, triangle inequality)");
+  }
+  return M;
 }
 
 Mat3 uniform_density_inertia(const Shape& shape, double mass) {

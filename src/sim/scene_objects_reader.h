@@ -14,6 +14,9 @@ namespace se3 {
 /// name, non-unit quaternion, ...).
 void read_scene_objects(const SceneReader& r, const SceneReader::Field& v,
                         const std::string& base_dir, std::vector<SceneObject>& out);
+/// A 3x3 inertia about a centre: [ixx, iyy, izz], six values (ixx, iyy, izz, ixy, ixz, iyz) or
+/// a symmetric 3x3 list; positive definite and within the triangle inequality.
+Mat3 read_inertia(const SceneReader& r, const SceneReader::Field& f);
 /// `srdf: PATH` (relative to base_dir): the file, which must exist.
 std::string read_scene_srdf(const SceneReader& r, const SceneReader::Field& v,
                             const std::string& base_dir);
