@@ -29,10 +29,15 @@ PKG = 'se3_sim'
 
 
 def args():
-    a = [x for x in sys.argv[1:] if not x.startswith('__') and ':=' not in x]
-    if len(a) < 4:
-        raise SystemExit('usage: install_space_check.py BUILD DEVEL INSTALL SOURCE')
-    return [os.path.realpath(x) for x in a[:4]]
+    # CMakeLists.txt writes the four folders into the devel space (on CMAKE_PREFIX_PATH).
+    for prefix in os.environ.get('CMAKE_PREFIX_PATH', '').split(':'):
+        path = os.path.join(prefix, 'share', PKG, 'install_space_paths')
+        if prefix and os.path.isfile(path):
+            lines = [l for l in open(path).read().splitlines() if l]
+            if len(lines) >= 4:
+                return [os.path.realpath(x) for x in lines[:4]]
+    raise SystemExit('install_space_check.py: no share/se3_sim/install_space_paths on '
+                     'CMAKE_PREFIX_PATH (written by CMakeLists.txt into the devel space)')
 
 
 BUILD, DEVEL, INSTALL, SOURCE = args()
