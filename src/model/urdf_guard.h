@@ -33,9 +33,6 @@ struct XmlShape {
 /// "<!...>" and quoted attribute values skipped as tinyxml skips them); never recurses.
 XmlShape xml_shape(const std::string& xml);
 
-/// Offset of the first byte of s that is not valid UTF-8 (s.size() when all is valid).
-std::size_t first_invalid_utf8(const std::string& s);
-
 /// Refuses URDF text that is not UTF-8, or beyond limits.h (bytes, depth, attributes, links,
 /// joints) with a ModelError naming the limit and the line.
 void check_urdf_text(const std::string& xml);

@@ -11,42 +11,12 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "model/utf8.h"
 #include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 
 namespace se3 {
 namespace {
-
-// Offset of the first byte that is not valid UTF-8 (overlong forms, surrogates and code points
-// past U+10FFFF included), or the text's size when all of it is.
-std::size_t invalid_utf8_at(const std::string& s) {
-  const std::size_t n = s.size();
-  std::size_t i = 0;
-  while (i < n) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if (c < 0x80) {
-      ++i;
-      continue;
-    }
-    const std::size_t len = c >= 0xC2 && c <= 0xDF   ? 2
-                            : c >= 0xE0 && c <= 0xEF ? 3
-                            : c >= 0xF0 && c <= 0xF4 ? 4
-                                                     : 0;
-    if (len == 0 || i + len > n) return i;
-    unsigned long cp = c & (0x7Fu >> len);
-    for (std::size_t k = 1; k < len; ++k) {
-      const auto b = static_cast<unsigned char>(s[i + k]);
-      if ((b & 0xC0) != 0x80) return i;
-      cp = (cp << 6) | (b & 0x3Fu);
-    }
-    if ((len == 3 && cp < 0x800) || (len == 4 && (cp < 0x10000 || cp > 0x10FFFF)) ||
-        (cp >= 0xD800 && cp <= 0xDFFF)) {
-      return i;
-    }
-    i += len;
-  }
-  return n;
-}
 
 // A value or key quoted in a message: one line, at most 60 characters.
 std::string shown(const std::string& s) {
@@ -118,7 +88,7 @@ class TextLimits {
                        std::to_string(limits::kMaxSceneBytes) +
                        " a scene may have (docs/robustness.md)");
     }
-    const size_t bad = invalid_utf8_at(s_);
+    const size_t bad = first_invalid_utf8(s_);
     if (bad < s_.size() && throwing) {
       throw SceneError(file_ + ":" +
                        std::to_string(1 + std::count(s_.begin(), s_.begin() + bad, '\n')) +
