@@ -52,7 +52,7 @@ struct Data {
   /// frame).
   std::vector<Vec6> F;
   /// aba: articulated-body inertias, eq. (38) (body frame; the upper triangle only); minv:
-  /// articulated inertias in the world frame (both triangles).
+  /// articulated inertias in the world frame (the upper triangle only).
   std::vector<Mat6> IA;
   /// crba: composite inertias of the subtrees, eq. (50) (body frame when crba_local, else world).
   std::vector<Inertia> Ic;

@@ -45,6 +45,13 @@ struct JointModel {
   int nv = 1;     ///< coordinates in the generalized velocity v
   int idx_q = 0;  ///< first of them in q (Model::finalize sets it)
   int idx_v = 0;  ///< first of them in v (Model::finalize sets it)
+  /// X_tree's rotation turns about z only, R = [Q 0; 0 1] with exact zeros and one (the identity
+  /// among them): then so does X_tree exp(S q), and the recursions transform by its 2x2 block Q
+  /// (src/dynamics/joint.h). Model::finalize sets it from X_tree; nothing is rounded to get it.
+  bool z_rotation = false;
+  /// The components of X_tree's offset p that are nonzero, bit k for p[k] (7: all): a revolute
+  /// joint's cross products with p skip the others (src/dynamics/joint.h). Model::finalize sets it.
+  unsigned char offset_axes = 7;
 
   JointModel() = default;
   explicit JointModel(JointType t);
@@ -136,8 +143,8 @@ struct Model {
   double total_mass() const;
   /// Checks sizes and numbers; throws ModelError naming the culprit.
   void validate() const;
-  /// Fills joints[0] (from floating), every joint's idx_q and idx_v, nq, nv, children and
-  /// subtree_end; call after building a model by hand.
+  /// Fills joints[0] (from floating), every joint's idx_q, idx_v, z_rotation and offset_axes, nq,
+  /// nv, children and subtree_end; call after building a model by hand (and after changing X_tree).
   void finalize();
   /// Starts a model by hand: only the base body 0 (link `root`, the given inertia), no joints.
   void start_with_base(const std::string& root, const Inertia& base_inertia = Inertia());

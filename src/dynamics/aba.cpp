@@ -29,25 +29,28 @@ inline double up(const Mat6& m, int r, int c) {
 
 // out (upper triangle) += Ia's blocks after the rotation, A' (upper), B' and C' (both triangles),
 // moved by the shift of eq. (38)'s Ad*: with P = hat(p), A'' = A' + M + M^T - N P, B'' = B' + N,
-// C'' = C', where N = P C' and M = P B'^T (N P is symmetric).
-inline void add_shifted(const Vec3& p, const double (&Ap)[3][3], const double (&Bp)[3][3],
-                        const double (&Cp)[3][3], Mat6& out) {
-  const double px = p[0], py = p[1], pz = p[2];
+// C'' = C', where N = P C' and M = P B'^T (N P is symmetric). C' is given with both triangles
+// (its column j is its row j); PM: the components of p that may be nonzero (detail::cross).
+template <int PM>
+SE3_KERNEL void add_shifted(const Vec3& pv, const double (&Ap)[3][3], const double (&Bp)[3][3],
+                            const double (&Cp)[3][3], Mat6& out) {
+  using detail::cross;
+  const double* p = pv.data();
   double N[3][3], M[3][3];
 #pragma GCC unroll 3
   for (int j = 0; j < 3; ++j) {  // N(:, j) = p x C'(:, j); M(:, j) = p x B'(j, :)
-    N[0][j] = py * Cp[2][j] - pz * Cp[1][j];
-    N[1][j] = pz * Cp[0][j] - px * Cp[2][j];
-    N[2][j] = px * Cp[1][j] - py * Cp[0][j];
-    M[0][j] = py * Bp[j][2] - pz * Bp[j][1];
-    M[1][j] = pz * Bp[j][0] - px * Bp[j][2];
-    M[2][j] = px * Bp[j][1] - py * Bp[j][0];
+    N[0][j] = cross<PM, 0>(p, Cp[j]);
+    N[1][j] = cross<PM, 1>(p, Cp[j]);
+    N[2][j] = cross<PM, 2>(p, Cp[j]);
+    M[0][j] = cross<PM, 0>(p, Bp[j]);
+    M[1][j] = cross<PM, 1>(p, Bp[j]);
+    M[2][j] = cross<PM, 2>(p, Bp[j]);
   }
   double* o = out.data();
 #pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
-    const double q[3] = {py * N[i][2] - pz * N[i][1], pz * N[i][0] - px * N[i][2],
-                         px * N[i][1] - py * N[i][0]};  // -(N P)(i, :)
+    const double q[3] = {cross<PM, 0>(p, N[i]), cross<PM, 1>(p, N[i]),
+                         cross<PM, 2>(p, N[i])};  // -(N P)(i, :)
 #pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {
       if (j >= i) {
@@ -68,8 +71,12 @@ inline void add_shifted(const Vec3& p, const double (&Ap)[3][3], const double (&
 // A' = R A R^T = u r0^T + w r1^T (r_k the columns of R, u = a00 r0 + a01 r1,
 // w = a01 r0 + a11 r1), B' = R B R^T = r0 (R b0)^T + r1 (R b1)^T (b_k the rows of B),
 // C' = R C R^T; then the shift (add_shifted).
-inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
-                            const Vec6& pA, const Vec6& c, Mat6& IAp) {
+//
+// ZR (f.R = [Q 0; 0 1]): r0 = (Q00, Q10, 0), r1 = (Q01, Q11, 0), r2 = e_3, so A' and B' keep
+// a zero third row (and A' a zero third column) and only Q enters the products.
+template <bool ZR, int PM>
+SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
+                                const Vec6& pA, const Vec6& c, Mat6& IAp) {
   const double* m = IA.data();  // m[r + 6 c], r <= c
   double Ud[6];
 #pragma GCC unroll 6
@@ -99,6 +106,37 @@ inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double 
   // (38): the rotation.
   const double* R = f.R.data();  // column-major: R(r, k) = R[r + 3 k]
   double Ap[3][3], Bp[3][3], Cp[3][3], Z[3][3], y0[3], y1[3], uu[3], ww[3];
+  if constexpr (ZR) {
+    const double q00 = R[0], q10 = R[1], q01 = R[3], q11 = R[4];
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {  // Z = R C: rows 0, 1 mixed by Q, row 2 kept
+      Z[0][j] = q00 * C[0][j] + q01 * C[1][j];
+      Z[1][j] = q10 * C[0][j] + q11 * C[1][j];
+      Z[2][j] = C[2][j];
+    }
+    y0[0] = q00 * B[0][0] + q01 * B[0][1], y0[1] = q10 * B[0][0] + q11 * B[0][1], y0[2] = B[0][2];
+    y1[0] = q00 * B[1][0] + q01 * B[1][1], y1[1] = q10 * B[1][0] + q11 * B[1][1], y1[2] = B[1][2];
+    uu[0] = a00 * q00 + a01 * q01, uu[1] = a00 * q10 + a01 * q11;
+    ww[0] = a01 * q00 + a11 * q01, ww[1] = a01 * q10 + a11 * q11;
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {
+      Bp[0][j] = q00 * y0[j] + q01 * y1[j];
+      Bp[1][j] = q10 * y0[j] + q11 * y1[j];
+      Bp[2][j] = 0;
+    }
+    // C' = Z R^T (symmetric): columns 0, 1 by Q, column 2 kept.
+    Cp[0][0] = Z[0][0] * q00 + Z[0][1] * q01;
+    Cp[0][1] = Cp[1][0] = Z[0][0] * q10 + Z[0][1] * q11;
+    Cp[1][1] = Z[1][0] * q10 + Z[1][1] * q11;
+    Cp[0][2] = Cp[2][0] = Z[0][2];
+    Cp[1][2] = Cp[2][1] = Z[1][2];
+    Cp[2][2] = Z[2][2];
+    Ap[0][0] = uu[0] * q00 + ww[0] * q01, Ap[0][1] = uu[0] * q10 + ww[0] * q11;
+    Ap[1][1] = uu[1] * q10 + ww[1] * q11;
+    Ap[0][2] = Ap[1][2] = Ap[2][2] = 0;
+    add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
+    return pa;
+  }
 #pragma GCC unroll 3
   for (int r = 0; r < 3; ++r) {
     const double R0 = R[r], R1 = R[r + 3], R2 = R[r + 6];
@@ -120,13 +158,13 @@ inline Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double 
       }
     }
   }
-  add_shifted(f.p, Ap, Bp, Cp, IAp);
+  add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
   return pa;
 }
 
 // The same step for a prismatic body (eq. 38 on the full symmetric Ia; its row and column 5
 // vanish): out += Ad*_{f^-1} Ia Ad_{f^-1}, Ia given as a full symmetric array.
-inline void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6& out) {
+SE3_KERNEL void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6& out) {
   const double* R = f.R.data();
   auto Rm = [R](int r, int c) { return R[r + 3 * c]; };
   double Ap[3][3], Bp[3][3], Cp[3][3];
@@ -144,7 +182,7 @@ inline void add_transformed_inertia(const SE3& f, const double (&ia)[6][6], Mat6
       Ap[i][j] = a, Bp[i][j] = b, Cp[i][j] = cc;
     }
   }
-  add_shifted(f.p, Ap, Bp, Cp, out);
+  add_shifted<7>(f.p, Ap, Bp, Cp, out);
 }
 
 // Solves IA x = b for a symmetric positive definite IA given by its upper triangle, by Cholesky
@@ -179,7 +217,7 @@ inline Vec6 solve_spd6(const Mat6& IA, const Vec6& b) {
 }
 
 // J as a 6x6 (eq. 23), upper triangle: [I h^; -h^ m 1].
-inline void set_inertia_upper(const Inertia& J, Mat6& out) {
+SE3_KERNEL void set_inertia_upper(const Inertia& J, Mat6& out) {
   for (int c = 0; c < 3; ++c) {
     for (int r = 0; r <= c; ++r) up(out, r, c) = J.I(r, c);
   }
@@ -196,12 +234,12 @@ inline void set_inertia_upper(const Inertia& J, Mat6& out) {
 // go to the parent, Ad*_{f^-1} Ia Ad_{f^-1} into its IA (upper triangle) and Ad*_{f^-1} pa into
 // its pA. f = Xup: the body in its parent.
 template <class J>
-inline void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
-                        const Vec6& pA, const Vec6& c, Mat6& IAp, Vec6& pAp) {
+SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
+                            const Vec6& pA, const Vec6& c, Mat6& IAp, Vec6& pAp) {
   constexpr int k = J::axis;
   Vec6 pa;
   if constexpr (k == 2) {
-    pa = inward_revolute(f, IA, U, Dinv, u, pA, c, IAp);
+    pa = inward_revolute<J::z_rotation, J::offset>(f, IA, U, Dinv, u, pA, c, IAp);
   } else {
     double ia[6][6];
     const Vec6 Ud = U * Dinv;
@@ -215,7 +253,7 @@ inline void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, double D
     }
     add_transformed_inertia(f, ia, IAp);
   }
-  detail::add_force(f, pa.data(), pAp.data());
+  detail::add_force<J::z_rotation, J::offset>(f, pa.data(), pAp.data());
 }
 
 }  // namespace
@@ -237,19 +275,34 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     const JointModel& jm = model.joints[i];
     const double qd = v[jm.idx_v];
     double* V = data.V[i].data();
-    detail::with_joint(jm, [&](auto J) {
-      detail::child_twist(J, data.Xup[i], data.V[model.parent[i]].data(), qd, V);
-      J.bias_acceleration(V, qd, data.c[i].data());
-    });
     const Inertia& I = model.inertia[i];
     set_inertia_upper(I, data.IA[i]);
-    detail::bias_force(I, V, data.F[i].data());  // pA, eq. (39): -ad*_V J V
+    double* pA = data.F[i].data();
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
+      constexpr int k = J.axis;
+      if (model.parent[i] == 0 && !model.floating) {
+        // On the fixed base: V = S qd, so gamma = V x S qd = 0 and pA = V x* (J V) =
+        // qd^2 e_z x [I e_z; h x e_z] on both halves (revolute), 0 (prismatic).
+        for (int r = 0; r < 6; ++r) V[r] = 0, data.c[i][r] = 0, pA[r] = 0;
+        V[k] = qd;
+        if constexpr (k == 2) {
+          double G[6];
+          J.inertia_column(I, G);
+          const double q2 = qd * qd;
+          pA[0] = -(q2 * G[1]), pA[1] = q2 * G[0], pA[3] = -(q2 * G[4]), pA[4] = q2 * G[3];
+        }
+        return;
+      }
+      detail::child_twist(J, data.Xup[i], data.V[model.parent[i]].data(), qd, V);
+      J.bias_acceleration(V, qd, data.c[i].data());
+      detail::bias_force(I, V, pA);  // pA, eq. (39): -ad*_V J V
+    });
   }
   // Inward: articulated inertias (38) and bias forces (40)-(41).
   for (int i = model.n; i >= 1; --i) {
     const JointModel& jm = model.joints[i];
     const int iv = jm.idx_v;
-    detail::with_joint(jm, [&](auto J) {
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
       const Mat6& IA = data.IA[i];
       Vec6& U = data.U[iv];
@@ -277,17 +330,26 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     const JointModel& jm = model.joints[i];
     const int iv = jm.idx_v;
     double* a = data.A[i].data();
-    detail::inv_motion(data.Xup[i], data.A[model.parent[i]].data(), a);
-    const double* c = data.c[i].data();
     const double* U = data.U[iv].data();
-    double Ua = 0;
-    for (int r = 0; r < 6; ++r) {
-      a[r] += c[r];
-      Ua += U[r] * a[r];
-    }
-    const double qdd = (data.u[iv] - Ua) * data.Dinv[iv];
-    detail::with_joint(jm, [&](auto J) { a[J.axis] += qdd; });
-    data.ddq[iv] = qdd;
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
+      double Ua;
+      if (model.parent[i] == 0 && !model.floating) {  // a = [0; R^T ag] (gamma = 0)
+        a[0] = a[1] = a[2] = 0;
+        detail::rotate_back<J.z_rotation>(data.Xup[i].R.data(), ag[3], ag[4], ag[5], a + 3);
+        Ua = U[3] * a[3] + U[4] * a[4] + U[5] * a[5];
+      } else {
+        detail::inv_motion<J.z_rotation, J.offset>(data.Xup[i], data.A[model.parent[i]].data(), a);
+        const double* c = data.c[i].data();
+        Ua = 0;
+        for (int r = 0; r < 6; ++r) {
+          a[r] += c[r];
+          Ua += U[r] * a[r];
+        }
+      }
+      const double qdd = (data.u[iv] - Ua) * data.Dinv[iv];
+      a[J.axis] += qdd;
+      data.ddq[iv] = qdd;
+    });
   }
   return data.ddq;
 }

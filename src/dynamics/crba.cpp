@@ -17,6 +17,61 @@ namespace se3 {
 
 namespace {
 
+// out += `in` placed at f (Ad*_{f^-1} J Ad_{f^-1}): Inertia::add_transformed's sums, inline, and
+// for Z (f.R = [Q 0; 0 1]) without the products with R's exact zeros. With g = R h:
+// h' = g + m p, I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2.
+template <bool Z>
+SE3_KERNEL void add_transformed(const Inertia& in, const SE3& f, Inertia& out) {
+  const double m = in.m;
+  const double* h = in.h.data();
+  const double* R = f.R.data();  // column-major: R(r, c) = R[r + 3 c]
+  const double* J = in.I.data();
+  double g[3], Zr[3][3];  // g = R h, Zr = R I
+  if constexpr (Z) {
+    const double q00 = R[0], q10 = R[1], q01 = R[3], q11 = R[4];
+    g[0] = q00 * h[0] + q01 * h[1], g[1] = q10 * h[0] + q11 * h[1], g[2] = h[2];
+    for (int c = 0; c < 3; ++c) {
+      Zr[0][c] = q00 * J[3 * c] + q01 * J[3 * c + 1];
+      Zr[1][c] = q10 * J[3 * c] + q11 * J[3 * c + 1];
+      Zr[2][c] = J[3 * c + 2];
+    }
+  } else {
+    for (int r = 0; r < 3; ++r) {
+      const double r0 = R[r], r1 = R[r + 3], r2 = R[r + 6];
+      g[r] = r0 * h[0] + r1 * h[1] + r2 * h[2];
+      for (int c = 0; c < 3; ++c) {
+        Zr[r][c] = r0 * J[3 * c] + r1 * J[3 * c + 1] + r2 * J[3 * c + 2];
+      }
+    }
+  }
+  // (R I R^T)(r, c) = sum_k Zr(r, k) R(c, k).
+  auto rir = [&](int r, int c) {
+    if constexpr (Z) {
+      return c == 2 ? Zr[r][2] : Zr[r][0] * R[c] + Zr[r][1] * R[c + 3];
+    } else {
+      return Zr[r][0] * R[c] + Zr[r][1] * R[c + 3] + Zr[r][2] * R[c + 6];
+    }
+  };
+  const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  const double gx = g[0], gy = g[1], gz = g[2];
+  const double d = 2.0 * (px * gx + py * gy + pz * gz) + m * (px * px + py * py + pz * pz);
+  const double w0 = gx + 0.5 * m * px, w1 = gy + 0.5 * m * py, w2 = gz + 0.5 * m * pz;
+  out.m += m;
+  out.h[0] += gx + m * px;
+  out.h[1] += gy + m * py;
+  out.h[2] += gz + m * pz;
+  double* o = out.I.data();
+  const double i01 = rir(0, 1) - (w0 * py + px * w1);
+  const double i02 = rir(0, 2) - (w0 * pz + px * w2);
+  const double i12 = rir(1, 2) - (w1 * pz + py * w2);
+  o[0] += rir(0, 0) - 2 * w0 * px + d;
+  o[4] += rir(1, 1) - 2 * w1 * py + d;
+  o[8] += rir(2, 2) - 2 * w2 * pz + d;
+  o[1] += i01, o[3] += i01;
+  o[2] += i02, o[6] += i02;
+  o[5] += i12, o[7] += i12;
+}
+
 const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
   const int nv = model.nv;
   detail::joint_transforms(model, data, q);
@@ -28,14 +83,18 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     const int p = model.parent[i];
     const bool carry = p > 0 || model.floating;
     const Inertia& Ic = data.Ic[i];  // complete: every descendant has been added
-    if (carry) Ic.add_transformed(data.Xup[i], data.Ic[p]);
-    // F_i = Ic_i S_i: a column of eq. (23)'s matrix. The subtree's columns are [col, end).
     const JointModel& jm = model.joints[i];
+    if (carry) {
+      detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {
+        add_transformed<J.z_rotation>(Ic, data.Xup[i], data.Ic[p]);
+      });
+    }
+    // F_i = Ic_i S_i: a column of eq. (23)'s matrix. The subtree's columns are [col, end).
     const JointModel& last = model.joints[model.subtree_end[i]];
     const int col = jm.idx_v, end = last.idx_v + last.nv;
     const int k = jm.axis();
     double Fi[6];
-    detail::with_joint(jm, [&](auto J) { J.inertia_column(Ic, Fi); });
+    detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA { J.inertia_column(Ic, Fi); });
     for (int r = 0; r < 6; ++r) F[r][col] = Fi[r];
     // Row i of D over the subtree: D_ic = S_i^T F_c, every F_c of the subtree in frame i now.
     double* mcol = M + static_cast<std::ptrdiff_t>(col) * nv;
@@ -46,12 +105,14 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     if (!carry) continue;
     const double* R = data.Xup[i].R.data();
     const double* t = data.Xup[i].p.data();
-    for (int c = col; c < end; ++c) {
-      double x[6];
-      for (int r = 0; r < 6; ++r) x[r] = F[r][c];
-      detail::force_to_parent(R, t, x);
-      for (int r = 0; r < 6; ++r) F[r][c] = x[r];
-    }
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
+      for (int c = col; c < end; ++c) {
+        double x[6];
+        for (int r = 0; r < 6; ++r) x[r] = F[r][c];
+        detail::force_to_parent<J.z_rotation, J.offset>(R, t, x);
+        for (int r = 0; r < 6; ++r) F[r][c] = x[r];
+      }
+    });
   }
   if (model.floating) {  // the base rows: S_0 = 1, the F's now in the base frame
     for (int c = 6; c < nv; ++c) {
@@ -81,7 +142,8 @@ const MatX& crba_world(const Model& model, Data& data, const SE3& base, const Ve
   for (int r = 0; r < 6; ++r) J[r] = data.Jrow.row(r).data();
   for (int i = 1; i <= model.n; ++i) {
     double S[6];
-    detail::with_joint(model.joints[i], [&](auto Jt) { Jt.world_axis(data.oMb[i], S); });
+    detail::with_joint_form(model.joints[i],
+                            [&](auto Jt) SE3_LAMBDA { Jt.world_axis(data.oMb[i], S); });
     for (int r = 0; r < 6; ++r) J[r][v1 + i] = S[r];
   }
   double* M = data.M.data();  // column-major, leading dimension nv

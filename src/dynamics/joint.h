@@ -4,46 +4,74 @@
 // S^T x, S q, v x (S qd), I S reduce to a component or a column: the joint-axis sparsity.
 // with_joint() is the one dispatch on the joint type: each pass of a recursion calls it once per
 // body, with the step written once for any AxisJoint.
+//
+// A joint whose X_tree turns about z only (JointModel::z_rotation: R = [Q 0; 0 1] exactly, e.g.
+// the identity: the first joint of the arms, Solo12's knees) keeps that form in X_tree exp(S q),
+// and its kernels transform by the 2x2 block Q: 4 multiplies per 3-vector instead of 9. They
+// compute the same sums as the general kernels less the products with the exact zeros, so the
+// results are the same numbers. Likewise a revolute joint's offset p (Xup's is X_tree's) has
+// components that are exactly zero on most robots (JointModel::offset_axes): its cross products
+// p x . then skip them.
 #pragma once
 
 #include <cmath>
 
 #include "se3_sim/dynamics.h"
 
+// The kernels below are instantiated per joint form (with_joint): forced inline so that each
+// recursion's step stays one function (GCC otherwise stops inlining the larger ones, with calls
+// and spills that cost more than the forms save).
+// SE3_LAMBDA does the same for the steps handed to with_joint.
+#if defined(__GNUC__)
+#define SE3_KERNEL inline __attribute__((always_inline))
+#define SE3_LAMBDA __attribute__((always_inline))
+#else
+#define SE3_KERNEL inline
+#define SE3_LAMBDA
+#endif
+
 namespace se3 {
 namespace detail {
 
 /// X_tree * exp(S q) of a revolute joint, given c = cos q and s = sin q: the parent-from-body
 /// displacement f_{i,j} = KK_j exp(S_j q_j) (eq. 26). Rz(q) turns the first two columns.
-inline void revolute_transform(const SE3& Xt, double c, double s, SE3& out) {
+template <bool Z = false>
+SE3_KERNEL void revolute_transform(const SE3& Xt, double c, double s, SE3& out) {
   const double* a = Xt.R.data();  // column-major
   double* r = out.R.data();
-  for (int k = 0; k < 3; ++k) {
+  constexpr int rows = Z ? 2 : 3;  // Z: a[2] = a[5] = 0, so r[2] = r[5] = 0 as in X_tree
+  for (int k = 0; k < rows; ++k) {
     r[k] = c * a[k] + s * a[3 + k];
     r[3 + k] = c * a[3 + k] - s * a[k];
-    r[6 + k] = a[6 + k];
   }
+  if constexpr (Z) r[2] = a[2], r[5] = a[5];
+  for (int k = 0; k < 3; ++k) r[6 + k] = a[6 + k];
   out.p = Xt.p;
 }
 
 /// X_tree * exp(S q) of a prismatic joint: a shift along the joint axis.
-inline void prismatic_transform(const SE3& Xt, double q, SE3& out) {
+SE3_KERNEL void prismatic_transform(const SE3& Xt, double q, SE3& out) {
   out.R = Xt.R;
   out.p = Xt.p + q * Xt.R.col(2);
 }
 
 /// A one-dof joint whose motion subspace is S = e_K (K = 2: rotation about z, K = 5: translation
-/// along z).
-template <int K>
+/// along z); Z: its X_tree turns about z only (JointModel::z_rotation).
+/// PM: the components of Xup's offset that may be nonzero (bit k for p[k]; 7 for a prismatic
+/// joint, whose offset moves with q).
+template <int K, bool Z = false, int PM = 7>
 struct AxisJoint {
   static_assert(K == 2 || K == 5, "joints turn about or slide along the body's z axis");
+  static_assert(K == 2 || PM == 7, "a prismatic joint's offset moves with q");
   static constexpr int axis = K;
+  static constexpr bool z_rotation = Z;
+  static constexpr int offset = PM;
 
   /// out = X_tree exp(S q); c = cos q and s = sin q (read by the revolute joint only).
-  static void transform(const SE3& Xt, double q, double c, double s, SE3& out) {
+  SE3_KERNEL static void transform(const SE3& Xt, double q, double c, double s, SE3& out) {
     if constexpr (K == 2) {
       (void)q;
-      revolute_transform(Xt, c, s, out);
+      revolute_transform<Z>(Xt, c, s, out);
     } else {
       (void)c, (void)s;
       prismatic_transform(Xt, q, out);
@@ -51,7 +79,7 @@ struct AxisJoint {
   }
   /// c = V x (S qd), the velocity-product acceleration of eq. (34), for the body's twist V (all
   /// six entries written).
-  static void bias_acceleration(const double* V, double qd, double* c) {
+  SE3_KERNEL static void bias_acceleration(const double* V, double qd, double* c) {
     if constexpr (K == 2) {
       c[0] = qd * V[1], c[1] = -qd * V[0], c[2] = 0, c[3] = qd * V[4], c[4] = -qd * V[3], c[5] = 0;
     } else {
@@ -59,7 +87,7 @@ struct AxisJoint {
     }
   }
   /// A += V x (S qd), the same for an acceleration that already holds Ad_{Xup^-1} A_parent.
-  static void add_bias_acceleration(const double* V, double qd, double* A) {
+  SE3_KERNEL static void add_bias_acceleration(const double* V, double qd, double* A) {
     if constexpr (K == 2) {
       A[0] += qd * V[1], A[1] -= qd * V[0], A[3] += qd * V[4], A[4] -= qd * V[3];
     } else {
@@ -67,7 +95,7 @@ struct AxisJoint {
     }
   }
   /// out = J S, the column K of eq. (23)'s matrix of J.
-  static void inertia_column(const Inertia& J, double* out) {
+  SE3_KERNEL static void inertia_column(const Inertia& J, double* out) {
     const double* I = J.I.data();
     if constexpr (K == 2) {
       out[0] = I[6], out[1] = I[7], out[2] = I[8];
@@ -79,7 +107,7 @@ struct AxisJoint {
   }
   /// out = Ad_f S, the joint's axis in the frame where the body sits at f (the world for f = oMb):
   /// revolute [z; p x z], prismatic [0; z], z = f.R e_3.
-  static void world_axis(const SE3& f, double* out) {
+  SE3_KERNEL static void world_axis(const SE3& f, double* out) {
     const double* R = f.R.data();
     const double zx = R[6], zy = R[7], zz = R[8];
     if constexpr (K == 2) {
@@ -97,63 +125,171 @@ struct AxisJoint {
 using RevoluteZ = AxisJoint<2>;
 using PrismaticZ = AxisJoint<5>;
 
-/// f(RevoluteZ()) or f(PrismaticZ()) for the joint of a moving body (Model::validate admits no
-/// other joint on bodies 1..n).
+template <bool Z, class F>
+SE3_KERNEL decltype(auto) with_revolute(int offset_axes, F&& f) {
+  switch (offset_axes) {
+    case 0:
+      return f(AxisJoint<2, Z, 0>());
+    case 1:
+      return f(AxisJoint<2, Z, 1>());
+    case 2:
+      return f(AxisJoint<2, Z, 2>());
+    case 3:
+      return f(AxisJoint<2, Z, 3>());
+    case 4:
+      return f(AxisJoint<2, Z, 4>());
+    case 5:
+      return f(AxisJoint<2, Z, 5>());
+    case 6:
+      return f(AxisJoint<2, Z, 6>());
+    default:
+      return f(AxisJoint<2, Z, 7>());
+  }
+}
+
+/// f(AxisJoint<K, Z, PM>()) for the joint of a moving body (Model::validate admits no other joint
+/// on bodies 1..n): K from its type, Z its z_rotation, PM its offset_axes (revolute).
 template <class F>
-inline decltype(auto) with_joint(const JointModel& j, F&& f) {
-  if (j.type == JointType::Revolute) return f(RevoluteZ());
-  return f(PrismaticZ());
+SE3_KERNEL decltype(auto) with_joint(const JointModel& j, F&& f) {
+  if (j.type == JointType::Revolute) {
+    if (j.z_rotation) return with_revolute<true>(j.offset_axes, f);
+    return with_revolute<false>(j.offset_axes, f);
+  }
+  if (j.z_rotation) return f(AxisJoint<5, true>());
+  return f(AxisJoint<5, false>());
+}
+
+/// with_joint for steps that read no offset (AxisJoint<K, Z>, PM = 7): fewer copies of them.
+template <class F>
+SE3_KERNEL decltype(auto) with_joint_form(const JointModel& j, F&& f) {
+  if (j.type == JointType::Revolute) {
+    if (j.z_rotation) return f(AxisJoint<2, true>());
+    return f(AxisJoint<2, false>());
+  }
+  if (j.z_rotation) return f(AxisJoint<5, true>());
+  return f(AxisJoint<5, false>());
 }
 
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
 /// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
 void joint_transforms(const Model& model, Data& data, const VecX& q);
 
-/// out = Ad_{f^-1} in for a twist (eq. 33's transform): (R^T w, R^T (v - p x w)). out != in.
-inline void inv_motion(const SE3& f, const double* in, double* out) {
-  const double* R = f.R.data();  // column-major
-  const double px = f.p[0], py = f.p[1], pz = f.p[2];
-  const double w0 = in[0], w1 = in[1], w2 = in[2];
-  const double t0 = in[3] - (py * w2 - pz * w1);
-  const double t1 = in[4] - (pz * w0 - px * w2);
-  const double t2 = in[5] - (px * w1 - py * w0);
-  for (int j = 0; j < 3; ++j) {
-    const double r0 = R[3 * j], r1 = R[3 * j + 1], r2 = R[3 * j + 2];
-    out[j] = r0 * w0 + r1 * w1 + r2 * w2;
-    out[3 + j] = r0 * t0 + r1 * t1 + r2 * t2;
+/// y = R^T x for a column-major R; Z: R = [Q 0; 0 1] (4 multiplies).
+template <bool Z = false>
+SE3_KERNEL void rotate_back(const double* R, double x0, double x1, double x2, double* y) {
+  if constexpr (Z) {
+    y[0] = R[0] * x0 + R[1] * x1;
+    y[1] = R[3] * x0 + R[4] * x1;
+    y[2] = x2;
+  } else {
+    for (int j = 0; j < 3; ++j) y[j] = R[3 * j] * x0 + R[3 * j + 1] * x1 + R[3 * j + 2] * x2;
   }
+}
+
+/// y = R x for a column-major R; Z: R = [Q 0; 0 1] (4 multiplies).
+template <bool Z = false>
+SE3_KERNEL void rotate(const double* R, double x0, double x1, double x2, double* y) {
+  if constexpr (Z) {
+    y[0] = R[0] * x0 + R[3] * x1;
+    y[1] = R[1] * x0 + R[4] * x1;
+    y[2] = x2;
+  } else {
+    for (int r = 0; r < 3; ++r) y[r] = R[r] * x0 + R[r + 3] * x1 + R[r + 6] * x2;
+  }
+}
+
+/// Component r of p x x, p[i] x[j] - p[j] x[i] for (i, j) = (r + 1, r + 2) mod 3, where only the
+/// components of p in PM (bit k: p[k]) may be nonzero: the others' products are left out (a
+/// product with an exact zero adds nothing; 0 when both are out).
+template <int PM, int r>
+SE3_KERNEL double cross(const double* p, const double* x) {
+  constexpr int i = (r + 1) % 3, j = (r + 2) % 3;
+  constexpr bool hi = (PM >> i) & 1, hj = (PM >> j) & 1;
+  if constexpr (hi && hj) {
+    return p[i] * x[j] - p[j] * x[i];
+  } else if constexpr (hi) {
+    return p[i] * x[j];
+  } else if constexpr (hj) {
+    return -(p[j] * x[i]);
+  } else {
+    return 0.0;
+  }
+}
+/// a - (p x x)_r with cross's PM, written so that a left-out product leaves no operation.
+template <int PM, int r>
+SE3_KERNEL double minus_cross(double a, const double* p, const double* x) {
+  constexpr int i = (r + 1) % 3, j = (r + 2) % 3;
+  constexpr bool hi = (PM >> i) & 1, hj = (PM >> j) & 1;
+  if constexpr (hi && hj) {
+    return a - (p[i] * x[j] - p[j] * x[i]);
+  } else if constexpr (hi) {
+    return a - p[i] * x[j];
+  } else if constexpr (hj) {
+    return a + p[j] * x[i];
+  } else {
+    return a;
+  }
+}
+/// a + (p x x)_r with cross's PM (a + 0 is a, but for the sign of a zero a).
+template <int PM, int r>
+SE3_KERNEL double plus_cross(double a, const double* p, const double* x) {
+  constexpr int i = (r + 1) % 3, j = (r + 2) % 3;
+  constexpr bool hi = (PM >> i) & 1, hj = (PM >> j) & 1;
+  if constexpr (hi && hj) {
+    return a + (p[i] * x[j] - p[j] * x[i]);
+  } else if constexpr (hi) {
+    return a + p[i] * x[j];
+  } else if constexpr (hj) {
+    return a - p[j] * x[i];
+  } else {
+    return a;
+  }
+}
+
+/// out = Ad_{f^-1} in for a twist (eq. 33's transform): (R^T w, R^T (v - p x w)). out != in.
+/// Z: f.R = [Q 0; 0 1]; PM: the components of f.p that may be nonzero.
+template <bool Z = false, int PM = 7>
+SE3_KERNEL void inv_motion(const SE3& f, const double* in, double* out) {
+  const double* R = f.R.data();  // column-major
+  const double* p = f.p.data();
+  const double w[3] = {in[0], in[1], in[2]};
+  const double t0 = minus_cross<PM, 0>(in[3], p, w);
+  const double t1 = minus_cross<PM, 1>(in[4], p, w);
+  const double t2 = minus_cross<PM, 2>(in[5], p, w);
+  rotate_back<Z>(R, w[0], w[1], w[2], out);
+  rotate_back<Z>(R, t0, t1, t2, out + 3);
 }
 
 /// The twist recursion of eq. (33) for one body: V = Ad_{Xup^-1} V_parent + S qd.
 template <class J>
-inline void child_twist(J, const SE3& Xup, const double* Vp, double qd, double* V) {
-  inv_motion(Xup, Vp, V);
+SE3_KERNEL void child_twist(J, const SE3& Xup, const double* Vp, double qd, double* V) {
+  inv_motion<J::z_rotation, J::offset>(Xup, Vp, V);
   V[J::axis] += qd;
 }
 
 /// x <- Ad*_{f^-1} x for wrenches x = (n0, n1, n2, f0, f1, f2) given by R, p of f (eq. 19:
-/// (R n + p x R f, R f)).
-inline void force_to_parent(const double* R, const double* p, double (&x)[6]) {
+/// (R n + p x R f, R f)). Z: R = [Q 0; 0 1]; PM: the components of p that may be nonzero.
+template <bool Z = false, int PM = 7>
+SE3_KERNEL void force_to_parent(const double* R, const double* p, double (&x)[6]) {
   double f[3], n[3];
-  for (int r = 0; r < 3; ++r) {
-    f[r] = R[r] * x[3] + R[r + 3] * x[4] + R[r + 6] * x[5];
-    n[r] = R[r] * x[0] + R[r + 3] * x[1] + R[r + 6] * x[2];
-  }
-  x[0] = n[0] + (p[1] * f[2] - p[2] * f[1]);
-  x[1] = n[1] + (p[2] * f[0] - p[0] * f[2]);
-  x[2] = n[2] + (p[0] * f[1] - p[1] * f[0]);
+  rotate<Z>(R, x[3], x[4], x[5], f);
+  rotate<Z>(R, x[0], x[1], x[2], n);
+  x[0] = plus_cross<PM, 0>(n[0], p, f);
+  x[1] = plus_cross<PM, 1>(n[1], p, f);
+  x[2] = plus_cross<PM, 2>(n[2], p, f);
   x[3] = f[0], x[4] = f[1], x[5] = f[2];
 }
 
-/// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f).
-inline void add_force(const SE3& f, const double* in, double* out) {
+/// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f). Z, PM: force_to_parent's.
+template <bool Z = false, int PM = 7>
+SE3_KERNEL void add_force(const SE3& f, const double* in, double* out) {
   double x[6] = {in[0], in[1], in[2], in[3], in[4], in[5]};
-  force_to_parent(f.R.data(), f.p.data(), x);
+  force_to_parent<Z, PM>(f.R.data(), f.p.data(), x);
   for (int r = 0; r < 6; ++r) out[r] += x[r];
 }
 
 /// out = J V for a twist V (eq. 23): (I w + h x v, m v - h x w).
-inline void inertia_times(const Inertia& J, const double* V, double* out) {
+SE3_KERNEL void inertia_times(const Inertia& J, const double* V, double* out) {
   const double w0 = V[0], w1 = V[1], w2 = V[2], v0 = V[3], v1 = V[4], v2 = V[5];
   const double hx = J.h[0], hy = J.h[1], hz = J.h[2], m = J.m;
   const double* I = J.I.data();
@@ -166,7 +302,7 @@ inline void inertia_times(const Inertia& J, const double* V, double* out) {
 }
 
 /// out = -ad*_V (J V) = V x* (J V), the velocity-product (bias) wrench of eqs. (24), (39).
-inline void bias_force(const Inertia& J, const double* V, double* out) {
+SE3_KERNEL void bias_force(const Inertia& J, const double* V, double* out) {
   double G[6];
   inertia_times(J, V, G);
   const double w0 = V[0], w1 = V[1], w2 = V[2], v0 = V[3], v1 = V[4], v2 = V[5];

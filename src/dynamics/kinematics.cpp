@@ -14,7 +14,9 @@ void joint_transforms(const Model& model, Data& data, const VecX& q) {
   for (int i = 1; i <= model.n; ++i) {
     const JointModel& jm = model.joints[i];
     const int k = jm.idx_q;
-    with_joint(jm, [&](auto J) { J.transform(model.X_tree[i], q[k], c[k], s[k], data.Xup[i]); });
+    with_joint_form(jm, [&](auto J) SE3_LAMBDA {
+      J.transform(model.X_tree[i], q[k], c[k], s[k], data.Xup[i]);
+    });
   }
 }
 
@@ -36,7 +38,7 @@ void body_twists(const Model& model, Data& data, const VecX& v) {
   }
   for (int i = 1; i <= model.n; ++i) {
     const JointModel& jm = model.joints[i];
-    detail::with_joint(jm, [&](auto J) {
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       detail::child_twist(J, data.Xup[i], data.V[model.parent[i]].data(), v[jm.idx_v],
                           data.V[i].data());
     });

@@ -18,10 +18,11 @@ namespace se3 {
 namespace {
 
 // The body's inertia J placed at f (the world frame for f = oMb), as the upper triangle of its
-// 6x6 matrix (eq. 23) in out; the lower triangle is left as it was. With g = R h: h' = g + m p,
+// 6x6 matrix (eq. 23) in out; the lower triangle is left as it was (minv reads the upper
+// triangles only). With g = R h: h' = g + m p,
 // I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2 (Inertia::transformed,
 // written straight into the matrix the recursion sums).
-inline void world_inertia(const Inertia& J, const SE3& f, Mat6& out) {
+SE3_KERNEL void world_inertia(const Inertia& J, const SE3& f, Mat6& out) {
   const double* R = f.R.data();  // column-major
   const double* I = J.I.data();
   const double* h = J.h.data();
@@ -46,19 +47,34 @@ inline void world_inertia(const Inertia& J, const SE3& f, Mat6& out) {
           Z[r][0] * R[c] + Z[r][1] * R[c + 3] + Z[r][2] * R[c + 6] - (w[r] * pv[c] + pv[r] * w[c]);
       if (r == c) x += d;
       o[r + 6 * c] = x;
-      o[c + 6 * r] = x;
     }
   }
   const double hx = g[0] + m * px, hy = g[1] + m * py, hz = g[2] + m * pz;
   o[0 + 18] = 0, o[0 + 24] = -hz, o[0 + 30] = hy;
   o[1 + 18] = hz, o[1 + 24] = 0, o[1 + 30] = -hx;
   o[2 + 18] = -hy, o[2 + 24] = hx, o[2 + 30] = 0;
-  o[3 + 0] = 0, o[4 + 0] = -hz, o[5 + 0] = hy;  // the transpose of the block above
-  o[3 + 6] = hz, o[4 + 6] = 0, o[5 + 6] = -hx;
-  o[3 + 12] = -hy, o[4 + 12] = hx, o[5 + 12] = 0;
-  o[3 + 18] = m, o[4 + 18] = 0, o[5 + 18] = 0;
-  o[3 + 24] = 0, o[4 + 24] = m, o[5 + 24] = 0;
-  o[3 + 30] = 0, o[4 + 30] = 0, o[5 + 30] = m;
+  o[3 + 18] = m, o[3 + 24] = 0, o[3 + 30] = 0;
+  o[4 + 24] = m, o[4 + 30] = 0;
+  o[5 + 30] = m;
+}
+
+// U = IA S for a symmetric IA given by its upper triangle (column-major, m[r + 6 c], r <= c),
+// each entry summed over c = 0..5 in order as the full product does.
+SE3_KERNEL void upper_times(const Mat6& IA, const Vec6& S, Vec6& U) {
+  const double* m = IA.data();
+  double u[6] = {0, 0, 0, 0, 0, 0};
+#pragma GCC unroll 6
+  for (int c = 0; c < 6; ++c) {
+    const double s = S[c];
+    double x = 0;
+#pragma GCC unroll 6
+    for (int r = 0; r < c; ++r) {
+      u[r] += m[r + 6 * c] * s;  // entry (r, c)
+      x += m[r + 6 * c] * S[r];  // entry (c, r) = (r, c)
+    }
+    u[c] = x + m[c + 6 * c] * s;
+  }
+  for (int r = 0; r < 6; ++r) U[r] = u[r];
 }
 
 }  // namespace
@@ -81,10 +97,10 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     const JointModel& jm = model.joints[i];
     const int row = v1 + i;
     Vec6& S = data.S[row];
-    detail::with_joint(jm, [&](auto J) { J.world_axis(data.oMb[i], S.data()); });
+    detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA { J.world_axis(data.oMb[i], S.data()); });
     const Mat6& IA = data.IA[i];
     Vec6& U = data.U[row];
-    U.noalias() = IA * S;                // (61) up to Omega^-1
+    upper_times(IA, S, U);               // (61) up to Omega^-1
     const double Dinv = 1.0 / S.dot(U);  // (60)
     data.Dinv[row] = Dinv;
     const int len = model.subtree_end[i] - i + 1;
@@ -122,8 +138,19 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
         f5[j] += u5 * x;
       }
     }
-    for (int j = row + len; j < nv; ++j) r[j] = 0;             // filled by the outward pass
-    if (carry) data.IA[p] += IA - (U * Dinv) * U.transpose();  // (59), (63)
+    for (int j = row + len; j < nv; ++j) r[j] = 0;  // filled by the outward pass
+    if (carry) {                                    // (59), (63), on the upper triangle
+      double* o = data.IA[p].data();
+      const double* a = IA.data();
+      double Ud[6];
+      for (int r = 0; r < 6; ++r) Ud[r] = U[r] * Dinv;
+#pragma GCC unroll 6
+      for (int c = 0; c < 6; ++c) {
+        const double uc = U[c];
+#pragma GCC unroll 6
+        for (int r = 0; r <= c; ++r) o[r + 6 * c] += a[r + 6 * c] - Ud[r] * uc;
+      }
+    }
   }
   if (model.floating) {
     // S_0 = 1 in the base frame: Omega_0 = Ad^T IA_0 Ad, row block = Omega_0^-1 (E - Ad^T F),
@@ -131,7 +158,8 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
     // contiguous), Omega_0 = L L^T by Cholesky.
     const SE3& f0 = data.oMb[0];
     const Mat6 Adf = Ad(f0);
-    const Mat6 Omega0 = Adf.transpose() * data.IA[0] * Adf;
+    const Mat6 IA0 = data.IA[0].selfadjointView<Eigen::Upper>();
+    const Mat6 Omega0 = Adf.transpose() * IA0 * Adf;
     const Eigen::LLT<Mat6> llt(Omega0);
     const Mat6 L = llt.matrixL();
     Data::Mat6X& P0 = data.Pm[data.P_slot[0]];

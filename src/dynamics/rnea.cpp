@@ -32,27 +32,49 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     const double qd = v[jm.idx_v], qdd = a[jm.idx_v];
     double* V = data.V[i].data();
     double* A = data.A[i].data();
-    // (33), (34), (35): V = Ad^-1 V_p + S qd, A = Ad^-1 A_p + V x S qd + S qdd.
-    detail::with_joint(jm, [&](auto J) {
-      detail::child_twist(J, X, data.V[p].data(), qd, V);
-      detail::inv_motion(X, data.A[p].data(), A);
-      J.add_bias_acceleration(V, qd, A);
-      A[J.axis] += qdd;
-    });
-    // (36), own-body term: F = J A - ad*_V (J V).
     const Inertia& I = model.inertia[i];
     double* F = data.F[i].data();
-    double B[6];
-    detail::inertia_times(I, A, F);
-    detail::bias_force(I, V, B);
-    for (int r = 0; r < 6; ++r) F[r] += B[r];
+    detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {
+      constexpr int k = J.axis;
+      if (p == 0 && !model.floating) {
+        // On the fixed base: V_p = 0 and A_p = [0; ag], so V = S qd, V x S qd = 0 and
+        // A = [0; R^T ag] + S qdd (the sums below without their zero terms).
+        for (int r = 0; r < 6; ++r) V[r] = 0;
+        V[k] = qd;
+        A[0] = A[1] = A[2] = 0;
+        detail::rotate_back<J.z_rotation>(X.R.data(), ag[0], ag[1], ag[2], A + 3);
+        A[k] += qdd;
+        // (36): F = J A + V x* (J V), J V = qd J S.
+        detail::inertia_times(I, A, F);
+        if constexpr (k == 2) {  // V x* (J V) = qd^2 e_z x [I e_z; h x e_z] on both halves
+          double G[6];
+          J.inertia_column(I, G);
+          const double q2 = qd * qd;
+          F[0] -= q2 * G[1], F[1] += q2 * G[0], F[3] -= q2 * G[4], F[4] += q2 * G[3];
+        }  // prismatic: V x* (J V) = [v x m v; 0] = 0
+        return;
+      }
+      // (33), (34), (35): V = Ad^-1 V_p + S qd, A = Ad^-1 A_p + V x S qd + S qdd.
+      detail::child_twist(J, X, data.V[p].data(), qd, V);
+      detail::inv_motion<J.z_rotation, J.offset>(X, data.A[p].data(), A);
+      J.add_bias_acceleration(V, qd, A);
+      A[k] += qdd;
+      // (36), own-body term: F = J A - ad*_V (J V).
+      double B[6];
+      detail::inertia_times(I, A, F);
+      detail::bias_force(I, V, B);
+      for (int r = 0; r < 6; ++r) F[r] += B[r];
+    });
   }
   for (int i = model.n; i >= 1; --i) {
     const JointModel& jm = model.joints[i];
     data.tau[jm.idx_v] = data.F[i][jm.axis()];  // eq. (37): S^T F
     const int p = model.parent[i];
-    if (p > 0 || model.floating)
-      detail::add_force(data.Xup[i], data.F[i].data(), data.F[p].data());  // eq. (36)
+    if (p > 0 || model.floating) {
+      detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {  // eq. (36)
+        detail::add_force<J.z_rotation, J.offset>(data.Xup[i], data.F[i].data(), data.F[p].data());
+      });
+    }
   }
   if (model.floating) data.tau.head<6>() = data.F[0];
   return data.tau;

@@ -7,6 +7,18 @@
 
 namespace se3 {
 
+namespace {
+// R = [Q 0; 0 1] exactly: the joint's kernels may then skip R's third row and column.
+bool is_z_rotation(const Mat3& R) {
+  return R(2, 0) == 0 && R(2, 1) == 0 && R(0, 2) == 0 && R(1, 2) == 0 && R(2, 2) == 1;
+}
+// Bit k set for p[k] != 0 (NaN counts as nonzero).
+unsigned char offset_axes(const Vec3& p) {
+  return static_cast<unsigned char>((p[0] != 0 ? 1 : 0) | (p[1] != 0 ? 2 : 0) |
+                                    (p[2] != 0 ? 4 : 0));
+}
+}  // namespace
+
 JointModel::JointModel(JointType t) : type(t) {
   nq = (t == JointType::Revolute || t == JointType::Prismatic) ? 1 : 0;
   nv = t == JointType::Free ? 6 : nq;
@@ -91,6 +103,10 @@ void Model::finalize() {
     nq += j.nq;
     nv += j.nv;
   }
+  for (int i = 1; i <= n && i < static_cast<int>(X_tree.size()); ++i) {
+    joints[i].z_rotation = is_z_rotation(X_tree[i].R);
+    joints[i].offset_axes = offset_axes(X_tree[i].p);
+  }
   children.assign(n + 1, {});
   for (int i = 1; i <= n; ++i) children[parent[i]].push_back(i);
   subtree_end.resize(n + 1);
@@ -155,7 +171,9 @@ void Model::validate() const {
                        " joint can only be the base's");
     }
     if (j.idx_q != nq_sum || j.idx_v != nv_sum || JointModel(j.type).nq != j.nq ||
-        JointModel(j.type).nv != j.nv) {
+        JointModel(j.type).nv != j.nv ||
+        (i > 0 && (j.z_rotation != is_z_rotation(X_tree[i].R) ||
+                   j.offset_axes != offset_axes(X_tree[i].p)))) {
       throw ModelError("model '" + name + "': joint coordinates out of order (finalize())");
     }
     nq_sum += j.nq;
