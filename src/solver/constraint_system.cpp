@@ -288,6 +288,9 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   p_ = VecX::Zero(max_rows_);
   vfree_ = VecX::Zero(nv_total_);
   one_contact_.assign(1, Contact{});
+  warm_ext_.assign(std::max(0, max_external_contacts), WarmExternal{});
+  warm_ext_next_.assign(warm_ext_.size(), WarmExternal{});
+  warm_ext_count_ = 0;
 }
 
 void ConstraintSystem::bind() {
@@ -570,7 +573,9 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
     } else {  // the deepest first, as many as fit
       for (int k = 0; k < room; ++k) {
         one_contact_[0] = (*in.contacts)[k];
+        const int n = rows_.count;
         add_contact_rows(rows_, one_contact_, *in.objects, frames_, systems_, vfree_, h, params_);
+        for (int r = n; r < rows_.count; ++r) rows_.id[r] = k;  // the contact's index
       }
     }
   }
@@ -590,6 +595,27 @@ bool ConstraintSystem::unilateral_within_reach(const State& x, const VecX& a_fre
   return false;
 }
 
+void ConstraintSystem::warm_start_external(int r, const Contact& ct) {
+  // The nearest of last step's contacts of the same pair, within a radius: contacts that move
+  // less than that per step keep their impulse (resting and slowly sliding ones).
+  constexpr double kWarmRadius = 0.01;  // m
+  double best = kWarmRadius * kWarmRadius;
+  const WarmExternal* from = nullptr;
+  for (int k = 0; k < warm_ext_count_; ++k) {
+    const WarmExternal& w = warm_ext_[k];
+    if (w.a != ct.a || w.b != ct.b) continue;
+    const double d2 = (w.point - ct.point).squaredNorm();
+    if (d2 < best) best = d2, from = &w;
+  }
+  if (!from) return;
+  // The normal impulse only: the active set's first guess is then "sticking" for a contact
+  // that carried load (a stack's upper contacts, whose free residual is zero since both boxes
+  // fall alike, would start separated and cost an update each). A friction impulse at the
+  // disc's edge would start it sliding, and its direction updates converge slowly (seen on
+  // panda_push: 30 updates a step, then divergence).
+  p_[r] = std::max(0.0, from->impulse.dot(ct.normal));
+}
+
 bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, const StepInput& in) {
   const Model& m = model_;
   const int nvr = m.nv;
@@ -606,8 +632,9 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
 
   // Warm starts by producer.
   int n_limits = 0, n_contacts = 0;
+  // All first: a normal row sets its friction rows, which come after it.
+  for (int r = 0; r < rows; ++r) p_[r] = 0;
   for (int r = 0; r < rows; ++r) {
-    p_[r] = 0;
     const int id = rows_.id[r];
     switch (rows_.type[r]) {
       case RowType::Equality:  // below
@@ -621,6 +648,8 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
           p_[r] = warm_contact_[id][0];
           p_[rows_.friction[r]] = warm_contact_[id][1];
           p_[rows_.friction2[r]] = warm_contact_[id][2];
+        } else {
+          warm_start_external(r, (*in.contacts)[id]);
         }
         ++n_contacts;
         break;
@@ -643,8 +672,12 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
       const int c0 = nvr + 6 * static_cast<int>(j);
       Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
     }
+    // W is symmetric: its lower triangle by the product, the upper copied (half the GEMM).
     auto W = W_.topLeftCorner(rows, rows);
-    W.noalias() = J * Y;
+    W.triangularView<Eigen::Lower>() = J * Y;
+    for (int j = 1; j < rows; ++j) {
+      for (int i = 0; i < j; ++i) W_(i, j) = W_(j, i);
+    }
     auto c = c_.head(rows);
     c.noalias() = J * vfree_;
     c -= rows_.b.head(rows);
@@ -687,6 +720,21 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     f.point = point_world(contacts_[k]) - contact_radius_[k] * nrm;
     f.gap = contact_gap_[k];
   }
+  int next = 0;
+  for (int r = internal_rows_end_; r < rows; ++r) {
+    if (rows_.type[r] != RowType::ContactNormal) continue;
+    if (next == static_cast<int>(warm_ext_next_.size())) break;
+    const Contact& ct = (*in.contacts)[rows_.id[r]];
+    Vec3 t1, t2;
+    tangent_basis(ct.normal, t1, t2);  // the basis add_contact_rows used
+    WarmExternal& w = warm_ext_next_[next++];
+    w.a = ct.a;
+    w.b = ct.b;
+    w.point = ct.point;
+    w.impulse = p_[r] * ct.normal + p_[rows_.friction[r]] * t1 + p_[rows_.friction2[r]] * t2;
+  }
+  warm_ext_.swap(warm_ext_next_);
+  warm_ext_count_ = next;
   for (int i = 1; i <= m.n; ++i) warm_lower_[i] = warm_upper_[i] = 0;
   for (Vec3& w : warm_contact_) w.setZero();
   for (int r = nb_; r < internal_rows_end_; ++r) {
