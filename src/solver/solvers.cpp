@@ -58,39 +58,6 @@ bool lu_solve(MatX& A, int m, std::vector<int>& piv, VecX& x) {
   return x.head(m).allFinite();
 }
 
-// The same for a symmetric positive definite A by Cholesky (A = L L^T, L in the lower triangle,
-// m^3/6 multiply-adds against LU's m^3/3): the active set's system when no contact slides.
-// Returns false when a pivot is not positive (A is then partly overwritten).
-bool cholesky_solve(MatX& A, int m, VecX& x) {
-  for (int k = 0; k < m; ++k) {
-    double* ck = &A(0, k);
-    if (!(ck[k] > 0)) return false;
-    const double l = std::sqrt(ck[k]);
-    ck[k] = l;
-    const double inv = 1.0 / l;
-    for (int i = k + 1; i < m; ++i) ck[i] *= inv;
-    for (int j = k + 1; j < m; ++j) {
-      double* cj = &A(0, j);
-      const double ajk = ck[j];
-      if (ajk == 0) continue;
-      for (int i = j; i < m; ++i) cj[i] -= ck[i] * ajk;
-    }
-  }
-  for (int k = 0; k < m; ++k) {  // L y = x
-    const double* ck = &A(0, k);
-    x[k] /= ck[k];
-    const double xk = x[k];
-    for (int i = k + 1; i < m; ++i) x[i] -= ck[i] * xk;
-  }
-  for (int k = m - 1; k >= 0; --k) {  // L^T z = y
-    const double* ck = &A(0, k);
-    double s = x[k];
-    for (int i = k + 1; i < m; ++i) s -= ck[i] * x[i];
-    x[k] = s / ck[k];
-  }
-  return x.head(m).allFinite();
-}
-
 // (W p)_r over the first n rows: W symmetric, so column r (contiguous) in place of row r.
 double row_dot(const MatX& W, int r, int n, const VecX& p) {
   const double* w = &W(0, r);
@@ -245,37 +212,25 @@ SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows&
         ws.var[m++] = rows.friction2[r];
       }
     }
-    // Column by column (W symmetric: W(ri, rj) = W(rj, ri), read down column rj). Without a
-    // sliding contact the system is symmetric positive definite: Cholesky, else (or should a
-    // pivot fail) LU.
-    bool sliding = false;
-    auto build = [&]() {
-      for (int j = 0; j < m; ++j) {
-        const int rj = ws.var[j];
-        double* a = &ws.A(0, j);
-        const double* wj = &W(0, rj);
-        for (int i = 0; i < m; ++i) a[i] = wj[ws.var[i]];
-        if (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal) {
-          const Eigen::Vector2d& d = ws.dir[rj];
-          const double s1 = rows.mu[rj] * d[0], s2 = rows.mu[rj] * d[1];
-          const double* w1 = &W(0, rows.friction[rj]);
-          const double* w2 = &W(0, rows.friction2[rj]);
-          for (int i = 0; i < m; ++i) a[i] += s1 * w1[ws.var[i]] + s2 * w2[ws.var[i]];
-        }
-        a[j] += opt.regularization * W(rj, rj) + 1e-300;
-        ws.x[j] = -c[rj];
-      }
-    };
+    // Column by column (W symmetric: W(ri, rj) = W(rj, ri), read down column rj).
     for (int j = 0; j < m; ++j) {
       const int rj = ws.var[j];
-      sliding = sliding || (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal);
+      double* a = &ws.A(0, j);
+      const double* wj = &W(0, rj);
+      for (int i = 0; i < m; ++i) a[i] = wj[ws.var[i]];
+      if (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal) {
+        const Eigen::Vector2d& d = ws.dir[rj];
+        const double s1 = rows.mu[rj] * d[0], s2 = rows.mu[rj] * d[1];
+        const double* w1 = &W(0, rows.friction[rj]);
+        const double* w2 = &W(0, rows.friction2[rj]);
+        for (int i = 0; i < m; ++i) a[i] += s1 * w1[ws.var[i]] + s2 * w2[ws.var[i]];
+      }
+      a[j] += opt.regularization * W(rj, rj) + 1e-300;
+      ws.x[j] = -c[rj];
     }
-    build();
-    if (m > 0 && !sliding && !cholesky_solve(ws.A, m, ws.x)) {
-      build();
-      sliding = true;
-    }
-    if (m > 0 && sliding && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // left to the polish
+    // LU, not Cholesky, also when no contact slides: on panda_push the Cholesky solution of the
+    // same (nearly singular) system sent the box flying (110 m in 2 s) where LU's does not.
+    if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // left to the polish below
     for (int r = 0; r < n; ++r) p[r] = 0;
     for (int i = 0; i < m; ++i) p[ws.var[i]] = ws.x[i];
     for (int r = 0; r < n; ++r) {
