@@ -306,7 +306,8 @@ class ConstraintSystem final : public AccelerationHook {
   int internal_rows_end_ = 0;  ///< rows before it: bilateral, limits, internal contacts
   MatX Y_, W_;
   VecX c_, p_;
-  std::vector<Vec3> warm_contact_;  ///< last impulses (n, t1, t2) per contact sphere
+  std::vector<std::uint64_t> row_mask_;  ///< per row: bit s set when it touches system s
+  std::vector<Vec3> warm_contact_;       ///< last impulses (n, t1, t2) per contact sphere
   /// Contacts from outside (the collision layer) have no identity across steps: the last
   /// step's are kept with their world impulse, and a new contact of the same object pair takes
   /// the impulse of the nearest one within 1 cm. Sized, not reserved (a copy keeps the size,

@@ -3,6 +3,7 @@
 // (constraints.h), on the rows of constraint.h and the solvers of solver.h.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "se3_sim/constraints.h"
@@ -287,6 +288,7 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   c_ = VecX::Zero(max_rows_);
   p_ = VecX::Zero(max_rows_);
   vfree_ = VecX::Zero(nv_total_);
+  row_mask_.assign(max_rows_, 0);
   one_contact_.assign(1, Contact{});
   warm_ext_.assign(std::max(0, max_external_contacts), WarmExternal{});
   warm_ext_next_.assign(warm_ext_.size(), WarmExternal{});
@@ -666,15 +668,68 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   if (rows > 0) {
     auto J = rows_.J.topRows(rows);
     auto Y = Y_.leftCols(rows);
-    const MatX& Minv = minv(m, data_, x.base, x.q);
-    Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
-    for (size_t j = 0; j < free_.size(); ++j) {
-      const int c0 = nvr + 6 * static_cast<int>(j);
-      Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
+    const int nsys = 1 + static_cast<int>(free_.size());
+    if (nsys > 64) {  // dense (a mask per row holds 64 systems)
+      const MatX& Minv = minv(m, data_, x.base, x.q);
+      Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
+      for (size_t j = 0; j < free_.size(); ++j) {
+        const int c0 = nvr + 6 * static_cast<int>(j);
+        Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
+      }
+      auto W = W_.topLeftCorner(rows, rows);
+      W.triangularView<Eigen::Lower>() = J * Y;
+    } else {
+      // Block-sparse: a contact row touches at most two systems (the robot, free bodies), and
+      // D^-1 is block-diagonal by system, so W(r, s) sums only over the systems both rows
+      // touch (box_stack: a quarter of the dense product's multiply-adds).
+      for (int r = 0; r < rows; ++r) {
+        std::uint64_t mask = 0;
+        if (nvr > 0 && !J.row(r).head(nvr).isZero(0)) mask |= 1;
+        for (int j = 1; j < nsys; ++j) {
+          if (!J.row(r).segment<6>(nvr + 6 * (j - 1)).isZero(0)) mask |= std::uint64_t(1) << j;
+        }
+        row_mask_[r] = mask;
+      }
+      const bool robot_rows = nvr > 0 && std::any_of(row_mask_.begin(), row_mask_.begin() + rows,
+                                                     [](std::uint64_t k) { return k & 1; });
+      if (robot_rows) {
+        const MatX& Minv = minv(m, data_, x.base, x.q);
+        Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
+      } else {
+        Y.topRows(nvr).setZero();
+      }
+      for (int j = 1; j < nsys; ++j) {
+        const int c0 = nvr + 6 * (j - 1);
+        const Mat6& Mi = free_[j - 1].Minv;
+        for (int r = 0; r < rows; ++r) {
+          if (row_mask_[r] >> j & 1) {
+            Y.col(r).segment<6>(c0).noalias() = Mi * J.row(r).segment<6>(c0).transpose();
+          } else {
+            Y.col(r).segment<6>(c0).setZero();
+          }
+        }
+      }
+      for (int r = 0; r < rows; ++r) {
+        for (int q = 0; q <= r; ++q) {
+          std::uint64_t both = row_mask_[r] & row_mask_[q];
+          double w = 0;
+          if (both & 1) {
+            const double* a = &rows_.J(r, 0);
+            const double* b = &Y_(0, q);
+            for (int k = 0; k < nvr; ++k) w += a[k] * b[k];
+            both &= ~std::uint64_t(1);
+          }
+          while (both) {
+            const int j = __builtin_ctzll(both);
+            both &= both - 1;
+            const int c0 = nvr + 6 * (j - 1);
+            w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
+          }
+          W_(r, q) = w;
+        }
+      }
     }
-    // W is symmetric: its lower triangle by the product, the upper copied (half the GEMM).
-    auto W = W_.topLeftCorner(rows, rows);
-    W.triangularView<Eigen::Lower>() = J * Y;
+    // W is symmetric: the lower triangle computed, the upper copied.
     for (int j = 1; j < rows; ++j) {
       for (int i = 0; i < j; ++i) W_(i, j) = W_(j, i);
     }
