@@ -242,13 +242,23 @@ void collide_pair(CollisionModel& model, int i, int j) {
   ++m.data->pairs_tested;
   const Object& oa = *m.fcl[i];
   const Object& ob = *m.fcl[j];
-  // Penetrating pairs (resting contact: most pairs that matter) need collide() alone; the
-  // distance query only for the others (two FCL calls for those, one for these).
-  m.result.clear();
-  fcl::collide(&oa, &ob, m.request, m.result);
-  if (m.result.numContacts() == 0) {
+  // Two primitives: collide() first, as a penetrating pair (resting contact: most pairs that
+  // matter) needs it alone, and the distance query only when it finds them apart. A hull
+  // (GJK/EPA either way) is mostly apart (self-collision): distance first, collide when touching.
+  const bool hulls = model.objects()[i].shape.type == ShapeType::Mesh ||
+                     model.objects()[j].shape.type == ShapeType::Mesh;
+  bool touching = false;
+  if (hulls) {
     m.dist_result.clear();
-    const double d = fcl::distance(&oa, &ob, m.dist_request, m.dist_result);
+    touching = !(fcl::distance(&oa, &ob, m.dist_request, m.dist_result) > 0);
+  }
+  m.result.clear();
+  if (!hulls || touching) fcl::collide(&oa, &ob, m.request, m.result);
+  if (m.result.numContacts() == 0) {
+    if (touching) return;
+    if (!hulls) m.dist_result.clear();
+    const double d =
+        hulls ? m.dist_result.min_distance : fcl::distance(&oa, &ob, m.dist_request, m.dist_result);
     if (!(d > 0) || d > m.margin) return;
     const Vec3 pa = m.dist_result.nearest_points[0], pb = m.dist_result.nearest_points[1];
     const Vec3 ab = pb - pa;

@@ -709,23 +709,22 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
           }
         }
       }
+      // The robot's block by the (triangular) GEMM, the free bodies' blocks by their masks.
+      auto W = W_.topLeftCorner(rows, rows);
+      if (robot_rows) W.triangularView<Eigen::Lower>() = J.leftCols(nvr) * Y.topRows(nvr);
       for (int r = 0; r < rows; ++r) {
+        const std::uint64_t mr = row_mask_[r] & ~std::uint64_t(1);
+        if (!mr && robot_rows) continue;
         for (int q = 0; q <= r; ++q) {
-          std::uint64_t both = row_mask_[r] & row_mask_[q];
+          std::uint64_t both = mr & row_mask_[q];
           double w = 0;
-          if (both & 1) {
-            const double* a = &rows_.J(r, 0);
-            const double* b = &Y_(0, q);
-            for (int k = 0; k < nvr; ++k) w += a[k] * b[k];
-            both &= ~std::uint64_t(1);
-          }
           while (both) {
             const int j = __builtin_ctzll(both);
             both &= both - 1;
             const int c0 = nvr + 6 * (j - 1);
             w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
           }
-          W_(r, q) = w;
+          W_(r, q) = robot_rows ? W_(r, q) + w : w;
         }
       }
     }
