@@ -3,18 +3,33 @@
 // drift (the largest displacement of a free object from where it started: a stack or a resting
 // object should not move). MuJoCo gets the scene's objects as MJCF (boxes, spheres, capsules,
 // cylinders; free joints; static geoms; the ground as a plane), the same dt, gravity and mu, its
-// default Newton solver with elliptic cones. Robot scenes are timed on our side only here (the
-// URDF through MuJoCo's compiler with matching collision geometry is not done yet).
+// default Newton solver with elliptic cones. A robot scene's robot goes through MuJoCo's URDF
+// compiler: the URDF of our model (model_to_urdf: body frames, locked joints fused, a floating
+// joint from a dummy root for a free base) with the collision shapes of the scene's robot
+// (meshes by their resolved path; MuJoCo collides with their convex hulls, as we do), saved by
+// MuJoCo as MJCF, and the objects and the ground added to that MJCF. Robot-robot pairs collide
+// only with `self_collision: true` (then the SRDF's disabled pairs are excluded; MuJoCo skips
+// parent-child pairs as we skip adjacent links); the robot's shapes get the ground's mu; the
+// scene's position controllers run on MuJoCo's side as the same PIDs (se3::Pid) on
+// qfrc_applied, outside the timed mj_step.
 //   devel/lib/se3_sim/bench_contact [scene.yaml ...]   (default: the shipped contact scenes)
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "se3_sim/collision.h"
+#include "se3_sim/controllers.h"
 #include "se3_sim/sim.h"
 
 #ifdef SE3_SIM_HAVE_MUJOCO
@@ -84,19 +99,18 @@ std::string geom(const SceneObject& o) {
   return g.str();
 }
 
-// The objects of a robot-free scene as MJCF; "" when MuJoCo cannot take it here.
-std::string mjcf(const Scene& sc) {
-  if (!sc.robot_path.empty()) return "";
+// The scene's objects (and the ground) as MJCF worldbody elements; "" when one cannot be given.
+// Free objects are bodies named obj<j>.
+std::string objects_mjcf(const Scene& sc) {
   std::ostringstream x;
-  x << "<mujoco><option timestep=\"" << sc.dt << "\" gravity=\"" << sc.gravity.x() << " "
-    << sc.gravity.y() << " " << sc.gravity.z() << "\" cone=\"elliptic\"/><worldbody>";
   if (sc.constraints.ground) {
-    x << "<geom type=\"plane\" size=\"0 0 1\" friction=\"" << sc.constraints.mu
-      << " 0.005 0.0001\"/>";
+    x << "<geom name=\"se3obj_ground\" type=\"plane\" size=\"0 0 1\" friction=\""
+      << sc.constraints.mu << " 0.005 0.0001\"/>";
   }
+  int j = 0, k = 0;
   for (const SceneObject& o : sc.objects) {
-    const std::string g = geom(o);
-    if (g.empty()) return "";
+    if (geom(o).empty()) return "";
+    const std::string g = "name=\"se3obj" + std::to_string(k++) + "\" " + geom(o);
     const Eigen::Vector4d q = quaternion_from_rotation(o.pose.R);  // x y z w
     std::ostringstream pose;
     pose << "pos=\"" << o.pose.p.x() << " " << o.pose.p.y() << " " << o.pose.p.z() << "\" quat=\""
@@ -105,37 +119,212 @@ std::string mjcf(const Scene& sc) {
       x << "<geom " << g << " " << pose.str() << "/>";
     } else {
       const Mat3& I = o.inertia.I;
-      x << "<body " << pose.str() << "><freejoint/><inertial pos=\"0 0 0\" mass=\"" << o.mass
-        << "\" fullinertia=\"" << I(0, 0) << " " << I(1, 1) << " " << I(2, 2) << " " << I(0, 1)
-        << " " << I(0, 2) << " " << I(1, 2) << "\"/><geom " << g << "/></body>";
+      x << "<body name=\"obj" << j++ << "\" " << pose.str()
+        << "><freejoint/><inertial pos=\"0 0 0\" mass=\"" << o.mass << "\" fullinertia=\""
+        << I(0, 0) << " " << I(1, 1) << " " << I(2, 2) << " " << I(0, 1) << " " << I(0, 2) << " "
+        << I(1, 2) << "\"/><geom " << g << "/></body>";
     }
   }
-  x << "</worldbody></mujoco>";
   return x.str();
+}
+
+// MuJoCo model of a robot-free scene.
+mjModel* load_objects(const Scene& sc, char* err, int nerr) {
+  const std::string objs = objects_mjcf(sc);
+  if (objs.empty() && !sc.objects.empty()) return nullptr;
+  const std::string xml = "<mujoco><worldbody>" + objs + "</worldbody></mujoco>";
+  auto vfs = std::make_unique<mjVFS>();  // 2 MB of file names: not on the stack
+  mj_defaultVFS(vfs.get());
+  mj_makeEmptyFileVFS(vfs.get(), "scene.xml", static_cast<int>(xml.size()));
+  std::copy(xml.begin(), xml.end(), static_cast<char*>(vfs->filedata[vfs->nfile - 1]));
+  mjModel* m = mj_loadXML("scene.xml", vfs.get(), err, nerr);
+  mj_deleteVFS(vfs.get());
+  return m;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The robot of a scene in MuJoCo (see the file comment), with the objects added to its MJCF.
+// Object geoms are named se3obj...; the others are the robot's.
+mjModel* load_robot(const Scene& sc, const Model& model, char* err, int nerr) {
+  GeometryModel g;
+  const bool spheres = !sc.constraints.contacts.empty() &&
+                       !sc.constraints.contacts_from_collisions && sc.objects.empty() &&
+                       !sc.self_collision;
+  if (spheres) {  // the scene's `contacts:` spheres on their links (a point: radius 0.1 mm)
+    for (const ContactPoint& c : sc.constraints.contacts) {
+      const int l = model.link_index(c.link);
+      if (l < 0) return nullptr;
+      GeometryObject geo;
+      geo.body = model.links[l].body;
+      geo.placement = SE3(Mat3::Identity(), model.links[l].offset.act(c.position));
+      geo.shape = make_sphere(std::max(c.radius, 1e-4));
+      g.visuals.push_back(geo);
+    }
+  } else {  // the robot's collision shapes, meshes by their resolved file
+    GeometryOptions gopt;
+    gopt.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+    const GeometryModel loaded = scene_geometry(sc, model, "", gopt);
+    for (GeometryObject geo : loaded.collisions) {
+      if (geo.stand_in || geo.body < 0) continue;
+      if (geo.shape.type == ShapeType::Mesh) geo.shape.resource = geo.shape.path;
+      g.visuals.push_back(geo);
+    }
+  }
+  std::string urdf = model_to_urdf(model, &g);
+  for (const char* tag : {"visual>"}) {
+    for (std::size_t k; (k = urdf.find(tag)) != std::string::npos;) {
+      urdf.replace(k, 6, "collision");
+    }
+  }
+  if (model.floating) {
+    urdf.insert(urdf.rfind("</robot>"),
+                "<link name=\"se3_sim_world\"/><joint name=\"se3_sim_free\" "
+                "type=\"floating\"><parent link=\"se3_sim_world\"/><child "
+                "link=\"" +
+                    model.body_name[0] + "\"/></joint>\n");
+  }
+  urdf.insert(urdf.find('>', urdf.find("<robot")) + 1,
+              "<mujoco><compiler fusestatic=\"true\" inertiafromgeom=\"false\" boundmass=\"0\" "
+              "boundinertia=\"0\" balanceinertia=\"true\" strippath=\"false\" "
+              "discardvisual=\"false\"/></mujoco>");
+  const std::string base = "/tmp/se3_sim_bench_contact_" + std::to_string(getpid());
+  std::ofstream(base + ".urdf") << urdf;
+  mjModel* r = mj_loadXML((base + ".urdf").c_str(), nullptr, err, nerr);
+  std::remove((base + ".urdf").c_str());
+  if (!r) return nullptr;
+  const bool saved = mj_saveLastXML((base + ".xml").c_str(), r, err, nerr);
+  mj_deleteModel(r);
+  if (!saved) return nullptr;
+  std::string xml = slurp(base + ".xml");
+  const std::string objs = objects_mjcf(sc);
+  if (objs.empty() && !sc.objects.empty()) return nullptr;
+  xml.insert(xml.rfind("</worldbody>"), objs);
+  if (sc.self_collision && !sc.srdf.empty()) {
+    std::ostringstream ex;
+    ex << "<contact>";
+    for (const auto& pr : srdf_disabled_pairs(slurp(sc.srdf))) {
+      const int a = model.link_index(pr.first), b = model.link_index(pr.second);
+      if (a < 0 || b < 0 || model.links[a].body == model.links[b].body) continue;
+      const int ba = model.links[a].body, bb = model.links[b].body;
+      if ((ba == 0 || bb == 0) && !model.floating) continue;  // the world body
+      ex << "<exclude body1=\"" << model.body_name[ba] << "\" body2=\"" << model.body_name[bb]
+         << "\"/>";
+    }
+    // MuJoCo's parent-child filter skips a body welded to the world: its children by hand.
+    for (int i = 1; i <= model.n && !model.floating; ++i) {
+      if (model.parent[i] == 0)
+        ex << "<exclude body1=\"world\" body2=\"" << model.body_name[i] << "\"/>";
+    }
+    ex << "</contact>";
+    xml.insert(xml.rfind("</mujoco>"), ex.str());
+  }
+  std::ofstream(base + ".xml") << xml;
+  mjModel* m = mj_loadXML((base + ".xml").c_str(), nullptr, err, nerr);
+  if (!std::getenv("BENCH_CONTACT_KEEP_MJCF")) std::remove((base + ".xml").c_str());
+  if (!m) return nullptr;
+  for (int k = 0; k < m->ngeom; ++k) {
+    const char* nm = mj_id2name(m, mjOBJ_GEOM, k);
+    if (nm && std::string(nm).rfind("se3obj", 0) == 0) {
+      m->geom_contype[k] = m->geom_conaffinity[k] = 3;
+      continue;
+    }
+    m->geom_friction[3 * k] = sc.constraints.mu;  // the robot's shapes: the ground's mu
+    if (!sc.self_collision) {  // robot-robot never: type 1 meets affinity 2 (objects: 3, 3)
+      m->geom_contype[k] = 1;
+      m->geom_conaffinity[k] = 2;
+    }
+  }
+  return m;
 }
 
 Figures theirs(const std::string& file) {
   Figures f;
   const Scene sc = load_scene(file);
-  const std::string xml = mjcf(sc);
-  if (xml.empty()) return f;
   char err[1000] = "";
-  auto vfs = std::make_unique<mjVFS>();  // 2 MB of file names: not on the stack
-  mj_defaultVFS(vfs.get());
-  mj_makeEmptyFileVFS(vfs.get(), "scene.xml", static_cast<int>(xml.size()));
-  std::copy(xml.begin(), xml.end(), static_cast<char*>(vfs->filedata[vfs->nfile - 1]));
-  mjModel* m = mj_loadXML("scene.xml", vfs.get(), err, sizeof err);
-  mj_deleteVFS(vfs.get());
+  std::unique_ptr<Model> model;
+  mjModel* m = nullptr;
+  if (sc.robot_path.empty()) {
+    m = load_objects(sc, err, sizeof err);
+  } else {
+    model = std::make_unique<Model>(scene_model(sc));
+    m = load_robot(sc, *model, err, sizeof err);
+  }
   if (!m) {
-    std::fprintf(stderr, "%s: MuJoCo: %s\n", file.c_str(), err);
+    if (err[0]) std::fprintf(stderr, "%s: MuJoCo: %s\n", file.c_str(), err);
     return f;
+  }
+  m->opt.timestep = sc.dt;
+  for (int k = 0; k < 3; ++k) m->opt.gravity[k] = sc.gravity[k];
+  m->opt.cone = mjCONE_ELLIPTIC;
+  // The robot's initial state and its controllers' joints (MuJoCo qpos / dof by joint name).
+  State x0;
+  struct Servo {
+    int qpos, dof;
+    double target, limit;  // the command, the URDF effort limit (ours clamps to it too)
+    Pid pid;
+  };
+  std::vector<Servo> servos;
+  std::vector<std::pair<int, int>> joints;  // (qpos, dof) of our joint i, 1..n
+  if (model) {
+    x0 = scene_state(sc, *model);
+    joints.resize(model->n + 1);
+    for (int i = 1; i <= model->n; ++i) {
+      const int j = mj_name2id(m, mjOBJ_JOINT, model->joint_name[i].c_str());
+      if (j < 0) {
+        std::fprintf(stderr, "%s: MuJoCo has no joint %s\n", file.c_str(),
+                     model->joint_name[i].c_str());
+        mj_deleteModel(m);
+        return f;
+      }
+      joints[i] = {m->jnt_qposadr[j], m->jnt_dofadr[j]};
+    }
+    for (const ControllerSpec& c : sc.controllers) {
+      for (std::size_t k = 0; k < c.joints.size() && k < c.gains.size(); ++k) {
+        const int i = model->joint_index(c.joints[k]);
+        if (i < 1) continue;
+        servos.push_back({joints[i].first, joints[i].second, x0.q[model->idx_q(i)],
+                          model->effort[i], Pid(c.gains[k])});
+      }
+    }
+  }
+  std::vector<int> objects;  // MuJoCo body ids of the free objects
+  for (int b = 1; b < m->nbody; ++b) {
+    const char* nm = mj_id2name(m, mjOBJ_BODY, b);
+    if (nm && std::string(nm).rfind("obj", 0) == 0) objects.push_back(b);
   }
   std::vector<double> t;
   for (int rep = 0; rep < 3; ++rep) {
     mjData* d = mj_makeData(m);
+    if (model) {
+      for (int i = 1; i <= model->n; ++i) {
+        d->qpos[joints[i].first] = x0.q[model->idx_q(i)];
+        d->qvel[joints[i].second] = x0.v[model->idx_v(i)];
+      }
+      if (model->floating) {
+        const int j = mj_name2id(m, mjOBJ_JOINT, "se3_sim_free");
+        mjtNum* q = d->qpos + m->jnt_qposadr[j];
+        const Eigen::Vector4d r = quaternion_from_rotation(x0.base.R);
+        for (int k = 0; k < 3; ++k) q[k] = x0.base.p[k];
+        q[3] = r[3], q[4] = r[0], q[5] = r[1], q[6] = r[2];
+      }
+      for (Servo& s : servos) s.pid.reset();
+    }
+    mj_forward(m, d);
+    std::vector<Vec3> start;
+    for (int b : objects)
+      start.push_back(Vec3(d->xpos[3 * b], d->xpos[3 * b + 1], d->xpos[3 * b + 2]));
     const int n = static_cast<int>(2.0 / m->opt.timestep);
     double pen = 0, tsum = 0;
     for (int k = 0; k < n; ++k) {
+      for (Servo& s : servos) {
+        const double u = s.pid.compute(s.target - d->qpos[s.qpos], m->opt.timestep);
+        d->qfrc_applied[s.dof] =
+            std::isfinite(s.limit) && s.limit > 0 ? std::clamp(u, -s.limit, s.limit) : u;
+      }
       const auto t0 = std::chrono::steady_clock::now();
       mj_step(m, d);
       tsum += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -144,12 +333,10 @@ Figures theirs(const std::string& file) {
     t.push_back(tsum / n * 1e6);
     f.penetration = pen;
     double drift = 0;
-    for (int b = 1; b < m->nbody; ++b) {
-      const mjtNum* p0 = m->body_pos + 3 * b;
-      const mjtNum* p = d->xpos + 3 * b;
-      drift = std::max(drift,
-                       std::sqrt((p[0] - p0[0]) * (p[0] - p0[0]) + (p[1] - p0[1]) * (p[1] - p0[1]) +
-                                 (p[2] - p0[2]) * (p[2] - p0[2])));
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      const int b = objects[k];
+      drift = std::max(
+          drift, (Vec3(d->xpos[3 * b], d->xpos[3 * b + 1], d->xpos[3 * b + 2]) - start[k]).norm());
     }
     f.drift = drift;
     mj_deleteData(d);

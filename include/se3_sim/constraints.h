@@ -264,6 +264,8 @@ class ConstraintSystem final : public AccelerationHook {
   void build_rows(const State& x, double h, const StepInput& in);
   /// The internal contacts (contact spheres against the ground) at the current kinematics.
   void ground_contacts();
+  /// Row r (an outside contact's normal) and its friction rows from last step's contacts.
+  void warm_start_external(int r, const Contact& ct);
 
   const Model& model_;
   ConstraintSpec spec_;
@@ -304,7 +306,18 @@ class ConstraintSystem final : public AccelerationHook {
   int internal_rows_end_ = 0;  ///< rows before it: bilateral, limits, internal contacts
   MatX Y_, W_;
   VecX c_, p_;
-  std::vector<Vec3> warm_contact_;  ///< last impulses (n, t1, t2) per contact sphere
+  std::vector<std::uint64_t> row_mask_;  ///< per row: bit s set when it touches system s
+  std::vector<Vec3> warm_contact_;       ///< last impulses (n, t1, t2) per contact sphere
+  /// Contacts from outside (the collision layer) have no identity across steps: the last
+  /// step's are kept with their world impulse, and a new contact of the same object pair takes
+  /// the impulse of the nearest one within 1 cm. Sized, not reserved (a copy keeps the size,
+  /// not the capacity): the first warm_ext_count_ are in use; never allocates in a step.
+  struct WarmExternal {
+    int a = -1, b = -1;
+    Vec3 point = Vec3::Zero(), impulse = Vec3::Zero();
+  };
+  std::vector<WarmExternal> warm_ext_, warm_ext_next_;
+  int warm_ext_count_ = 0;
   std::vector<double> warm_lower_, warm_upper_, contact_gap_;
   VecX warm_bil_;
   std::vector<ConstraintForce> forces_;

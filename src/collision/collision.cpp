@@ -232,19 +232,34 @@ Vec3 support(const CollisionObject& o, const ConvexHull* hull, const SE3& T, con
   return T.p;
 }
 
-// Narrow phase of a pair that passed the filter and the broad phase: FCL's distance (GJK) first;
-// a pair apart by less than the margin gives one contact of negative depth between the nearest
-// points, a penetrating pair FCL's contacts (EPA or the closed forms FCL has for primitives).
+// Narrow phase of a pair that passed the filter and the broad phase: FCL's collide first (a
+// penetrating pair: FCL's contacts, EPA or the closed forms FCL has for primitives); a pair it
+// finds apart, FCL's distance (GJK): apart by less than the margin gives one contact of negative
+// depth between the nearest points.
 void collide_pair(CollisionModel& model, int i, int j) {
   CollisionModel::Impl& m = model.impl();
   if (i > j) std::swap(i, j);
   ++m.data->pairs_tested;
   const Object& oa = *m.fcl[i];
   const Object& ob = *m.fcl[j];
-  m.dist_result.clear();
-  const double d = fcl::distance(&oa, &ob, m.dist_request, m.dist_result);
-  if (d > m.margin) return;
-  if (d > 0) {
+  // Two primitives: collide() first, as a penetrating pair (resting contact: most pairs that
+  // matter) needs it alone, and the distance query only when it finds them apart. A hull
+  // (GJK/EPA either way) is mostly apart (self-collision): distance first, collide when touching.
+  const bool hulls = model.objects()[i].shape.type == ShapeType::Mesh ||
+                     model.objects()[j].shape.type == ShapeType::Mesh;
+  bool touching = false;
+  if (hulls) {
+    m.dist_result.clear();
+    touching = !(fcl::distance(&oa, &ob, m.dist_request, m.dist_result) > 0);
+  }
+  m.result.clear();
+  if (!hulls || touching) fcl::collide(&oa, &ob, m.request, m.result);
+  if (m.result.numContacts() == 0) {
+    if (touching) return;
+    if (!hulls) m.dist_result.clear();
+    const double d =
+        hulls ? m.dist_result.min_distance : fcl::distance(&oa, &ob, m.dist_request, m.dist_result);
+    if (!(d > 0) || d > m.margin) return;
     const Vec3 pa = m.dist_result.nearest_points[0], pb = m.dist_result.nearest_points[1];
     const Vec3 ab = pb - pa;
     if (ab.norm() < 1e-12) return;
@@ -257,8 +272,6 @@ void collide_pair(CollisionModel& model, int i, int j) {
     m.data->contacts.push_back(c);
     return;
   }
-  m.result.clear();
-  fcl::collide(&oa, &ob, m.request, m.result);
   const std::size_t first = m.data->contacts.size();
   for (std::size_t k = 0; k < m.result.numContacts(); ++k) {
     const fcl::Contactd& fc = m.result.getContact(k);
