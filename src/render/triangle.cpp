@@ -179,9 +179,118 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
 }
 #endif
 
-// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most eight pixels
-// are drawn here pixel by pixel (most triangles of a detailed mesh; the same code serves both
-// paths), the rest go to the pixel loops.
+// A triangle whose box is at most 4 x 4 pixels (most triangles of a detailed mesh): which
+// centres are covered is found first, from the edge values alone; only then the planes, and
+// a pixel's z and k come straight from its three edge values (no per-row stepping).
+struct Small {
+  int bx0, by0, w, h;
+  int32_t e[3];          // edge values at the box's first centre
+  int32_t t[3];          // the same with the top-left rule folded in (covered <=> all >= 0)
+  int32_t ex[3], ey[3];  // steps per pixel
+  float z[3], k[3];      // vertices a, b, c (edge i weighs the vertex opposite it)
+  int32_t area2;         // twice the area, > 0
+};
+
+void small_scalar(const Small& q, const float rgb[3], const Target& T) {
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    for (int i = 0; i < q.w; ++i) {
+      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
+           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
+        covered |= 1u << (4 * j + i);
+      }
+    }
+  }
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const float wa = q.z[0] * inv, wb = q.z[1] * inv, wc = q.z[2] * inv;
+  const float ua = q.k[0] * inv, ub = q.k[1] * inv, uc = q.k[2] * inv;
+  for (int j = 0; j < q.h; ++j) {
+    const int y = q.by0 + j;
+    if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
+    for (int i = 0; i < q.w; ++i) {
+      if (!(covered >> (4 * j + i) & 1u)) continue;
+      const float ff0 = float(q.e[0] + i * q.ex[0] + j * q.ey[0]);
+      const float ff1 = float(q.e[1] + i * q.ex[1] + j * q.ey[1]);
+      const float ff2 = float(q.e[2] + i * q.ex[2] + j * q.ey[2]);
+      const float z = ff0 * wc + ff1 * wa + ff2 * wb;
+      const std::size_t at = std::size_t(y) * T.W + q.bx0 + i;
+      if (z > T.depth[at]) {
+        T.depth[at] = z;
+        T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
+      }
+    }
+  }
+}
+
+#if SE3_RASTER_SSE2
+// (0, s, 2 s, 3 s) + v.
+inline __m128i ramp_sse2(int32_t v, int32_t s) {
+  const __m128i sv = _mm_set1_epi32(s);
+  const __m128i r = _mm_add_epi32(_mm_add_epi32(_mm_slli_si128(sv, 4), _mm_slli_si128(sv, 8)),
+                                  _mm_slli_si128(sv, 12));
+  return _mm_add_epi32(r, _mm_set1_epi32(v));
+}
+
+// The same pixels and bits as small_scalar, a row of four at a time (needs bx0 + 4 <= W).
+void small_sse2(const Small& q, const float rgb[3], const Target& T) {
+  __m128i a0 = ramp_sse2(q.t[0], q.ex[0]), a1 = ramp_sse2(q.t[1], q.ex[1]),
+          a2 = ramp_sse2(q.t[2], q.ex[2]);
+  const __m128i y0 = _mm_set1_epi32(q.ey[0]), y1 = _mm_set1_epi32(q.ey[1]),
+                y2 = _mm_set1_epi32(q.ey[2]);
+  const unsigned wbits = (1u << q.w) - 1;
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    const unsigned out =
+        unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_or_si128(_mm_or_si128(a0, a1), a2))));
+    covered |= (~out & wbits) << (4 * j);
+    a0 = _mm_add_epi32(a0, y0);
+    a1 = _mm_add_epi32(a1, y1);
+    a2 = _mm_add_epi32(a2, y2);
+  }
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const __m128 wa = _mm_set1_ps(q.z[0] * inv), wb = _mm_set1_ps(q.z[1] * inv),
+               wc = _mm_set1_ps(q.z[2] * inv);
+  const __m128 ua = _mm_set1_ps(q.k[0] * inv), ub = _mm_set1_ps(q.k[1] * inv),
+               uc = _mm_set1_ps(q.k[2] * inv);
+  __m128i f0 = ramp_sse2(q.e[0], q.ex[0]), f1 = ramp_sse2(q.e[1], q.ex[1]),
+          f2 = ramp_sse2(q.e[2], q.ex[2]);
+  const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
+  const __m128 c255 = _mm_set1_ps(255.0f);
+  for (int j = 0; j < q.h;
+       ++j, f0 = _mm_add_epi32(f0, y0), f1 = _mm_add_epi32(f1, y1), f2 = _mm_add_epi32(f2, y2)) {
+    const int bits = int(covered >> (4 * j) & 15u);
+    const int y = q.by0 + j;
+    if (!bits || !T.rows.has(y)) continue;
+    const __m128 ff0 = _mm_cvtepi32_ps(f0), ff1 = _mm_cvtepi32_ps(f1), ff2 = _mm_cvtepi32_ps(f2);
+    const __m128 z =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, wc), _mm_mul_ps(ff1, wa)), _mm_mul_ps(ff2, wb));
+    const std::size_t at = std::size_t(y) * T.W + q.bx0;
+    float* drow = T.depth + at;
+    uint32_t* crow = T.color + at;
+    const __m128 d = _mm_loadu_ps(drow);
+    const __m128 in =
+        _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), bit), bit));
+    const __m128 m = _mm_and_ps(in, _mm_cmpgt_ps(z, d));
+    if (!_mm_movemask_ps(m)) continue;
+    _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+    const __m128 k =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, uc), _mm_mul_ps(ff1, ua)), _mm_mul_ps(ff2, ub));
+    const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[0]), k), c255));
+    const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[1]), k), c255));
+    const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[2]), k), c255));
+    const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+    const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+    const __m128i mi = _mm_castps_si128(m);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
+                     _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+  }
+}
+#endif
+
+// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most 4 x 4 pixels
+// go to the small-triangle path, the rest to the pixel loops.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
               const float rgb[3], const Target& T, bool simd);
 constexpr int32_t kMaxExtent = 1 << 14;
@@ -233,40 +342,25 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
   const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
   const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
-  if (w <= 4 && h <= 4 && w * h <= 8) {
-    // Which of the (at most eight) centres are covered; only then the planes.
-    unsigned covered = 0;
-    for (int j = 0; j < h; ++j) {
-      const int32_t sy = kSubpixel * j;
-      for (int i = 0; i < w; ++i) {
-        const int32_t sx = kSubpixel * i;
-        if (((t0 + sx * dy0 - sy * dx0) | (t1 + sx * dy1 - sy * dx1) |
-             (t2 + sx * dy2 - sy * dx2)) >= 0) {
-          covered |= 1u << (4 * j + i);
-        }
-      }
+  if (w <= 4 && h <= 4) {
+    const Small q{bx0,
+                  by0,
+                  w,
+                  h,
+                  {e0, e1, e2},
+                  {t0, t1, t2},
+                  {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
+                  {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
+                  {az, bz, cz},
+                  {ak, bk, ck},
+                  -area};
+#if SE3_RASTER_SSE2
+    if (kSimd && bx0 + 4 <= T.W) {
+      small_sse2(q, rgb, T);
+      return;
     }
-    if (!covered) return;
-    const float inv = 1.0f / float(-area);
-    const float wa = az * inv, wb = bz * inv, wc = cz * inv;
-    const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
-    for (int j = 0; j < h; ++j) {
-      const int y = by0 + j;
-      if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
-      const int32_t sy = kSubpixel * j;
-      for (int i = 0; i < w; ++i) {
-        if (!(covered >> (4 * j + i) & 1u)) continue;
-        const int32_t sx = kSubpixel * i;
-        const float ff0 = float(e0 + sx * dy0 - sy * dx0), ff1 = float(e1 + sx * dy1 - sy * dx1);
-        const float ff2 = float(e2 + sx * dy2 - sy * dx2);
-        const float z = ff0 * wc + ff1 * wa + ff2 * wb;
-        const std::size_t at = std::size_t(y) * T.W + bx0 + i;
-        if (z > T.depth[at]) {
-          T.depth[at] = z;
-          T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
-        }
-      }
-    }
+#endif
+    small_scalar(q, rgb, T);
     return;
   }
   const float inv = 1.0f / float(-area);
