@@ -11,6 +11,13 @@
 #include <emmintrin.h>
 #define SE3_RASTER_SSE2 1
 #endif
+// AVX2 (eight pixels wide) is chosen at run time: its functions carry their own target, the
+// build itself stays at the x86-64 baseline.
+#if SE3_RASTER_SSE2 && defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define SE3_RASTER_AVX2 1
+#define SE3_AVX2 __attribute__((target("avx2")))
+#endif
 
 namespace se3 {
 namespace render {
@@ -179,6 +186,83 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
 }
 #endif
 
+#if SE3_RASTER_AVX2
+// raster_sse2 eight pixels wide (the same operations lane by lane, so the same bits); needs
+// W >= 8.
+SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m256 zr, __m256 kr,
+                                __m256 zx, __m256 kx, const __m256 c[3], uint32_t* crow,
+                                float* drow) {
+  const __m256i outside = _mm256_srai_epi32(_mm256_or_si256(_mm256_or_si256(e0, e1), e2), 31);
+  const __m256 fi = _mm256_cvtepi32_ps(
+      _mm256_add_epi32(_mm256_set1_epi32(ii), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+  const __m256 z = _mm256_add_ps(zr, _mm256_mul_ps(zx, fi));
+  const __m256 d = _mm256_loadu_ps(drow);
+  const __m256 m = _mm256_andnot_ps(_mm256_castsi256_ps(outside), _mm256_cmp_ps(z, d, _CMP_GT_OQ));
+  if (!_mm256_movemask_ps(m)) return;
+  _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
+  const __m256 k = _mm256_add_ps(kr, _mm256_mul_ps(kx, fi));
+  const __m256 c255 = _mm256_set1_ps(255.0f);
+  const __m256i r = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[0], k), c255));
+  const __m256i g = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[1], k), c255));
+  const __m256i b = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[2], k), c255));
+  const __m256i px =
+      _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+  const __m256i old = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(crow));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(crow),
+                      _mm256_blendv_epi8(old, px, _mm256_castps_si256(m)));
+}
+
+SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
+  const int n = s.bx1 - s.bx0 + 1;
+  const int W = T.W;
+  const __m256 zx = _mm256_set1_ps(s.zx), kx = _mm256_set1_ps(s.kx);
+  const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  __m256i ev[3], eyv[3], ex8[3];
+  for (int k = 0; k < 3; ++k) {
+    ev[k] = _mm256_add_epi32(_mm256_set1_epi32(s.e0[k]),
+                             _mm256_mullo_epi32(lane, _mm256_set1_epi32(s.ex[k])));
+    eyv[k] = _mm256_set1_epi32(s.ey[k]);
+    ex8[k] = _mm256_set1_epi32(8 * s.ex[k]);
+  }
+  const bool border = s.bx0 + ((n + 7) & ~7) > W;
+  const bool all_rows = T.rows.parts == 1;
+  int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
+  float zrs = s.z0, krs = s.k0;
+  for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
+           zrs += s.zy, krs += s.ky, ev[0] = _mm256_add_epi32(ev[0], eyv[0]),
+           ev[1] = _mm256_add_epi32(ev[1], eyv[1]), ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+    if (!all_rows && !T.rows.has(y)) continue;
+    int i0 = 0, i1 = n - 1;
+    if (n >= kSpanMin && !row_span(er, s.ex, n, i0, i1)) continue;
+    const __m256 zr = _mm256_set1_ps(zrs), kr = _mm256_set1_ps(krs);
+    uint32_t* crow = T.color + std::size_t(y) * W + s.bx0;
+    float* drow = T.depth + std::size_t(y) * W + s.bx0;
+    if (!border) {
+      int i = i0 & ~7;
+      __m256i e0 = ev[0], e1 = ev[1], e2 = ev[2];
+      if (i) {
+        e0 = _mm256_add_epi32(e0, _mm256_set1_epi32(i * s.ex[0]));
+        e1 = _mm256_add_epi32(e1, _mm256_set1_epi32(i * s.ex[1]));
+        e2 = _mm256_add_epi32(e2, _mm256_set1_epi32(i * s.ex[2]));
+      }
+      for (; i <= i1; i += 8, e0 = _mm256_add_epi32(e0, ex8[0]), e1 = _mm256_add_epi32(e1, ex8[1]),
+                              e2 = _mm256_add_epi32(e2, ex8[2])) {
+        group_avx2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+      }
+    } else {
+      for (int i = i0 & ~7; i <= i1; i += 8) {
+        const int ii = std::min(i, W - 8 - s.bx0);
+        const __m256i e0 = _mm256_add_epi32(ev[0], _mm256_set1_epi32(ii * s.ex[0]));
+        const __m256i e1 = _mm256_add_epi32(ev[1], _mm256_set1_epi32(ii * s.ex[1]));
+        const __m256i e2 = _mm256_add_epi32(ev[2], _mm256_set1_epi32(ii * s.ex[2]));
+        group_avx2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+      }
+    }
+  }
+}
+#endif
+
 // A triangle whose box is at most 4 x 4 pixels (most triangles of a detailed mesh): which
 // centres are covered is found first, from the edge values alone; only then the planes, and
 // a pixel's z and k come straight from its three edge values (no per-row stepping).
@@ -292,10 +376,11 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
 // One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most 4 x 4 pixels
 // go to the small-triangle path, the rest to the pixel loops.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
-              const float rgb[3], const Target& T, bool simd);
+              const float rgb[3], const Target& T, int path);
 constexpr int32_t kMaxExtent = 1 << 14;
 
-template <bool kSimd>
+// kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
+template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
@@ -306,7 +391,7 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   const int32_t minx = std::min(ax_, std::min(bx_, cx_)), maxx = std::max(ax_, std::max(bx_, cx_));
   const int32_t miny = std::min(ay_, std::min(by_, cy_)), maxy = std::max(ay_, std::max(by_, cy_));
   if (maxx - minx > kMaxExtent || maxy - miny > kMaxExtent) {
-    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kSimd);
+    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kPath);
     return;
   }
   // Pixels whose centre (16 i + 8) lies in [min, max]: arithmetic shifts round down.
@@ -355,7 +440,7 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
                   {ak, bk, ck},
                   -area};
 #if SE3_RASTER_SSE2
-    if (kSimd && bx0 + 4 <= T.W) {
+    if (kPath >= 1 && bx0 + 4 <= T.W) {
       small_sse2(q, rgb, T);
       return;
     }
@@ -389,8 +474,14 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   s.k0 = fe0 * uc + fe1 * ua + fe2 * ub;
   s.kx = fx0 * uc + fx1 * ua + fx2 * ub;
   s.ky = fy0 * uc + fy1 * ua + fy2 * ub;
+#if SE3_RASTER_AVX2
+  if (kPath == 2) {
+    raster_avx2(s, rgb, T);
+    return;
+  }
+#endif
 #if SE3_RASTER_SSE2
-  if (kSimd) {
+  if (kPath >= 1) {
     raster_sse2(s, rgb, T);
     return;
   }
@@ -401,7 +492,7 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
 // Draws a triangle of any extent: one larger than 2^14 sub-pixels (1024 pixels: a big image,
 // a near face) is drawn as four, which share their new edges exactly.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
-              const float rgb[3], const Target& T, bool simd) {
+              const float rgb[3], const Target& T, int path) {
   const int64_t ext =
       std::max(int64_t(std::max(a.x, std::max(b.x, c.x))) - std::min(a.x, std::min(b.x, c.x)),
                int64_t(std::max(a.y, std::max(b.y, c.y))) - std::min(a.y, std::min(b.y, c.y)));
@@ -415,20 +506,22 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
       return m;
     };
     const RasterVertex ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-    draw_any(a, ab, ca, rgb, T, simd);
-    draw_any(ab, b, bc, rgb, T, simd);
-    draw_any(ca, bc, c, rgb, T, simd);
-    draw_any(ab, bc, ca, rgb, T, simd);
+    draw_any(a, ab, ca, rgb, T, path);
+    draw_any(ab, b, bc, rgb, T, path);
+    draw_any(ca, bc, c, rgb, T, path);
+    draw_any(ab, bc, ca, rgb, T, path);
     return;
   }
-  if (simd) {
-    draw_triangle<true>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  if (path == 2) {
+    draw_triangle<2>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  } else if (path == 1) {
+    draw_triangle<1>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
   } else {
-    draw_triangle<false>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+    draw_triangle<0>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
   }
 }
 
-template <bool kSimd>
+template <int kPath>
 std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3],
                     bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
@@ -448,7 +541,7 @@ std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count,
     if (!front && cull) continue;
     ++drawn;
     const float* k = front ? v.kf : v.kb;
-    draw_triangle<kSimd>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+    draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
   }
   return drawn;
 }
@@ -463,20 +556,44 @@ bool raster_has_simd() {
 #endif
 }
 
+RasterPath raster_best_path() {
+#if SE3_RASTER_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return RasterPath::Avx2;
+#endif
+  return raster_has_simd() ? RasterPath::Sse2 : RasterPath::Scalar;
+}
+
+// The path a frame of this width can take: the wide ones load whole groups of a row.
+int Framebuffer::usable_path() const {
+  int p = int(path_);
+  if (p == 2 && width_ < 8) p = 1;
+  if (p == 1 && width_ < 4) p = 0;
+  return p;
+}
+
 void Framebuffer::fill_triangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                                 const float rgb[3], const RowSet& rows) {
   const Target T{width_, height_, color_.data(), depth_.data(), rows};
-  draw_any(a, b, c, rgb, T, simd_ && width_ >= 4);
+  draw_any(a, b, c, rgb, T, usable_path());
 }
 
 std::size_t Framebuffer::fill_indexed(const VertexArrays& v, const uint32_t* idx, std::size_t count,
                                       const float rgb[3], bool cull, bool outward,
                                       const RowSet& rows, ClipCallback clip, void* ctx) {
   const Target T{width_, height_, color_.data(), depth_.data(), rows};
-#if SE3_RASTER_SSE2
-  if (simd_ && width_ >= 4) return indexed<true>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+  switch (usable_path()) {
+#if SE3_RASTER_AVX2
+    case 2:
+      return indexed<2>(v, idx, count, rgb, cull, outward, T, clip, ctx);
 #endif
-  return indexed<false>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+#if SE3_RASTER_SSE2
+    case 1:
+      return indexed<1>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+#endif
+    default:
+      return indexed<0>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+  }
 }
 
 void Framebuffer::fill_triangle(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c,
