@@ -318,8 +318,9 @@ inline __m128i ramp_sse2(int32_t v, int32_t s) {
 
 // The same pixels and bits as small_scalar, a row of four at a time (needs bx0 + 4 <= W).
 void small_sse2(const Small& q, const float rgb[3], const Target& T) {
-  __m128i a0 = ramp_sse2(q.t[0], q.ex[0]), a1 = ramp_sse2(q.t[1], q.ex[1]),
-          a2 = ramp_sse2(q.t[2], q.ex[2]);
+  const __m128i s0 = ramp_sse2(q.t[0], q.ex[0]), s1 = ramp_sse2(q.t[1], q.ex[1]),
+                s2 = ramp_sse2(q.t[2], q.ex[2]);
+  __m128i a0 = s0, a1 = s1, a2 = s2;
   const __m128i y0 = _mm_set1_epi32(q.ey[0]), y1 = _mm_set1_epi32(q.ey[1]),
                 y2 = _mm_set1_epi32(q.ey[2]);
   const unsigned wbits = (1u << q.w) - 1;
@@ -338,8 +339,9 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
                wc = _mm_set1_ps(q.z[2] * inv);
   const __m128 ua = _mm_set1_ps(q.k[0] * inv), ub = _mm_set1_ps(q.k[1] * inv),
                uc = _mm_set1_ps(q.k[2] * inv);
-  __m128i f0 = ramp_sse2(q.e[0], q.ex[0]), f1 = ramp_sse2(q.e[1], q.ex[1]),
-          f2 = ramp_sse2(q.e[2], q.ex[2]);
+  __m128i f0 = _mm_add_epi32(s0, _mm_set1_epi32(q.e[0] - q.t[0])),
+          f1 = _mm_add_epi32(s1, _mm_set1_epi32(q.e[1] - q.t[1])),
+          f2 = _mm_add_epi32(s2, _mm_set1_epi32(q.e[2] - q.t[2]));
   const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
   const __m128 c255 = _mm_set1_ps(255.0f);
   for (int j = 0; j < q.h;
@@ -369,6 +371,103 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
     const __m128i mi = _mm_castps_si128(m);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
                      _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+  }
+}
+#endif
+
+#if SE3_RASTER_AVX2
+// small_sse2 two rows at a time (rows j and j + 1 in the low and high halves).
+SE3_AVX2 inline __m256i pair_avx2(int32_t v, int32_t ex, int32_t ey) {
+  const __m256i i = _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3);
+  const __m256i j = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+  return _mm256_add_epi32(_mm256_set1_epi32(v),
+                          _mm256_add_epi32(_mm256_mullo_epi32(i, _mm256_set1_epi32(ex)),
+                                           _mm256_mullo_epi32(j, _mm256_set1_epi32(ey))));
+}
+
+SE3_AVX2 void small_avx2(const Small& q, const float rgb[3],
+                         const Target& T) {  // Edge values with the top-left rule (coverage) and
+                                             // without (the planes): they differ by
+  // a constant.
+  const __m256i s0 = pair_avx2(q.t[0], q.ex[0], q.ey[0]), s1 = pair_avx2(q.t[1], q.ex[1], q.ey[1]),
+                s2 = pair_avx2(q.t[2], q.ex[2], q.ey[2]);
+  __m256i a0 = s0, a1 = s1, a2 = s2;
+  const __m256i y0 = _mm256_set1_epi32(2 * q.ey[0]), y1 = _mm256_set1_epi32(2 * q.ey[1]),
+                y2 = _mm256_set1_epi32(2 * q.ey[2]);
+  const unsigned wbits = (1u << q.w) - 1;
+  // Bits of the box: w columns, h rows.
+  const unsigned box = (wbits * 0x1111u) & ((1u << (4 * q.h)) - 1);
+  const unsigned out0 = unsigned(
+      _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(a0, a1), a2))));
+  unsigned covered = ~out0 & 255u;
+  if (q.h > 2) {
+    a0 = _mm256_add_epi32(a0, y0);
+    a1 = _mm256_add_epi32(a1, y1);
+    a2 = _mm256_add_epi32(a2, y2);
+    const unsigned out1 = unsigned(
+        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(a0, a1), a2))));
+    covered |= (~out1 & 255u) << 8;
+  }
+  covered &= box;
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const __m256 wa = _mm256_set1_ps(q.z[0] * inv), wb = _mm256_set1_ps(q.z[1] * inv),
+               wc = _mm256_set1_ps(q.z[2] * inv);
+  const __m256 ua = _mm256_set1_ps(q.k[0] * inv), ub = _mm256_set1_ps(q.k[1] * inv),
+               uc = _mm256_set1_ps(q.k[2] * inv);
+  __m256i f0 = _mm256_add_epi32(s0, _mm256_set1_epi32(q.e[0] - q.t[0])),
+          f1 = _mm256_add_epi32(s1, _mm256_set1_epi32(q.e[1] - q.t[1])),
+          f2 = _mm256_add_epi32(s2, _mm256_set1_epi32(q.e[2] - q.t[2]));
+  const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 c255 = _mm256_set1_ps(255.0f);
+  for (int j = 0; j < q.h; j += 2, f0 = _mm256_add_epi32(f0, y0), f1 = _mm256_add_epi32(f1, y1),
+           f2 = _mm256_add_epi32(f2, y2)) {
+    unsigned bits = covered >> (4 * j) & 255u;
+    const int y = q.by0 + j;
+    if (!T.rows.has(y)) bits &= 0xf0u;
+    if (!T.rows.has(y + 1)) bits &= 0x0fu;  // also no row y + 1 in the box (bits are 0)
+    if (!bits) continue;
+    const __m256 ff0 = _mm256_cvtepi32_ps(f0), ff1 = _mm256_cvtepi32_ps(f1),
+                 ff2 = _mm256_cvtepi32_ps(f2);
+    const __m256 z = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, wc), _mm256_mul_ps(ff1, wa)),
+                                   _mm256_mul_ps(ff2, wb));
+    const std::size_t at = std::size_t(y) * T.W + q.bx0;
+    float* d0 = T.depth + at;
+    uint32_t* c0 = T.color + at;
+    // The second row only where it has pixels to draw (it may lie past the image).
+    const bool two = bits > 15u;
+    float* d1 = two ? d0 + T.W : d0;
+    uint32_t* c1 = two ? c0 + T.W : c0;
+    const __m256 d =
+        _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(d0)), _mm_loadu_ps(d1), 1);
+    const __m256 in = _mm256_castsi256_ps(
+        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(bits)), bit), bit));
+    const __m256 m = _mm256_and_ps(in, _mm256_cmp_ps(z, d, _CMP_GT_OQ));
+    const unsigned mm = unsigned(_mm256_movemask_ps(m));
+    if (!mm) continue;
+    const __m256 dn = _mm256_blendv_ps(d, z, m);
+    const __m256 k = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
+                                   _mm256_mul_ps(ff2, ub));
+    const __m256i r =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[0]), k), c255));
+    const __m256i g =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[1]), k), c255));
+    const __m256i b =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[2]), k), c255));
+    const __m256i px =
+        _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+    const __m256i old = _mm256_inserti128_si256(
+        _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c0))),
+        _mm_loadu_si128(reinterpret_cast<const __m128i*>(c1)), 1);
+    const __m256i cn = _mm256_blendv_epi8(old, px, _mm256_castps_si256(m));
+    if (mm & 15u) {
+      _mm_storeu_ps(d0, _mm256_castps256_ps128(dn));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(c0), _mm256_castsi256_si128(cn));
+    }
+    if (mm > 15u) {
+      _mm_storeu_ps(d1, _mm256_extractf128_ps(dn, 1));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(c1), _mm256_extracti128_si256(cn, 1));
+    }
   }
 }
 #endif
@@ -439,6 +538,12 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
                   {az, bz, cz},
                   {ak, bk, ck},
                   -area};
+#if SE3_RASTER_AVX2
+    if (kPath == 2 && bx0 + 4 <= T.W) {
+      small_avx2(q, rgb, T);
+      return;
+    }
+#endif
 #if SE3_RASTER_SSE2
     if (kPath >= 1 && bx0 + 4 <= T.W) {
       small_sse2(q, rgb, T);
@@ -522,8 +627,12 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
 }
 
 template <int kPath>
-std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3],
-                    bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline std::size_t
+indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3], bool cull,
+        bool outward, const Target& T, ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
   const uint32_t* end = t + 3 * count;
   for (; t < end; t += 3) {
@@ -545,6 +654,15 @@ std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count,
   }
   return drawn;
 }
+
+#if SE3_RASTER_AVX2
+// The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
+SE3_AVX2 std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t, std::size_t count,
+                                  const float rgb[3], bool cull, bool outward, const Target& T,
+                                  ClipCallback clip, void* ctx) {
+  return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
+}
+#endif
 
 }  // namespace
 
@@ -585,7 +703,7 @@ std::size_t Framebuffer::fill_indexed(const VertexArrays& v, const uint32_t* idx
   switch (usable_path()) {
 #if SE3_RASTER_AVX2
     case 2:
-      return indexed<2>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+      return indexed_avx2(v, idx, count, rgb, cull, outward, T, clip, ctx);
 #endif
 #if SE3_RASTER_SSE2
     case 1:
