@@ -657,7 +657,7 @@ indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float
 
 #if SE3_RASTER_AVX2
 // The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
-SE3_AVX2 std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t, std::size_t count,
+SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t, std::size_t count,
                                   const float rgb[3], bool cull, bool outward, const Target& T,
                                   ClipCallback clip, void* ctx) {
   return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
