@@ -41,11 +41,11 @@ struct Rect {
   }
 };
 
-/// Where a frame drew: tiles of 32 x 32 pixels marked by the rectangles added (items, markers,
+/// Where a frame drew: tiles of 8 x 8 pixels marked by the rectangles added (items, markers,
 /// the overlay), so that the next frame restores the background there only (separate items
 /// leave the space between them alone, as one enclosing rectangle would not).
 struct DirtyTiles {
-  static constexpr int kShift = 5;
+  static constexpr int kShift = 3;
   int tx = 0, ty = 0;
   std::vector<uint8_t> mark;  ///< tx * ty, row-major
   bool any = false;
