@@ -538,6 +538,11 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
                   {az, bz, cz},
                   {ak, bk, ck},
                   -area};
+    // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
+    if (w * h <= 2) {
+      small_scalar(q, rgb, T);
+      return;
+    }
 #if SE3_RASTER_AVX2
     if (kPath == 2 && bx0 + 4 <= T.W) {
       small_avx2(q, rgb, T);
@@ -657,9 +662,10 @@ indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float
 
 #if SE3_RASTER_AVX2
 // The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
-SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t, std::size_t count,
-                                  const float rgb[3], bool cull, bool outward, const Target& T,
-                                  ClipCallback clip, void* ctx) {
+SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t,
+                                                           std::size_t count, const float rgb[3],
+                                                           bool cull, bool outward, const Target& T,
+                                                           ClipCallback clip, void* ctx) {
   return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
 }
 #endif
