@@ -244,6 +244,95 @@ TEST(RenderRaster, BoxCoversExpectedPixelsAndBackgroundElsewhere) {
   EXPECT_GT(int(q.b), int(q.r) + 60);
 }
 
+// Every raster path (scalar, SSE2, AVX2 where the CPU has it) gives the same colour and depth
+// bits: random triangles from below a pixel to hundreds of pixels across (the small-triangle
+// path, the pixel loops with and without row spans, the split of very large ones), partly off
+// the image, through fill_triangle and fill_indexed (culling, two row sets), on an odd width
+// whose right border cuts groups of four and eight and on images narrower than a group.
+TEST(RenderRaster, AllPathsGiveTheSameBits) {
+  std::vector<RasterPath> paths = {RasterPath::Scalar};
+  if (raster_has_simd()) paths.push_back(RasterPath::Sse2);
+  if (raster_best_path() == RasterPath::Avx2) paths.push_back(RasterPath::Avx2);
+  std::printf("paths compared: %zu (best %d)\n", paths.size(), int(raster_best_path()));
+  for (const int size : {0, 1, 2}) {
+    const int W = size == 0 ? 1283 : size == 1 ? 7 : 3, H = size == 0 ? 301 : 9;
+    std::vector<Framebuffer> fbs;
+    for (RasterPath p : paths) {
+      fbs.emplace_back(W, H);
+      fbs.back().set_path(p);
+      EXPECT_EQ(fbs.back().path(), p);
+      fbs.back().clear_depth();
+    }
+    uint32_t seed = 12345u + uint32_t(size);
+    auto rnd = [&seed]() {  // [0, 1)
+      seed = seed * 1664525u + 1013904223u;
+      return double(seed >> 8) / double(1u << 24);
+    };
+    const int n = size == 0 ? 6000 : 300;
+    // fill_triangle, one triangle at a time.
+    for (int t = 0; t < n; ++t) {
+      const double scale = std::pow(10.0, 3.0 * rnd() - 1.0);  // 0.1 .. 100 px
+      const double cx = (1.2 * rnd() - 0.1) * W, cy = (1.2 * rnd() - 0.1) * H;
+      RasterVertex v[3];
+      for (RasterVertex& q : v) {
+        q.x = int32_t(std::lrint((cx + scale * (rnd() - 0.5) * (t % 97 == 0 ? 40 : 1)) * 16));
+        q.y = int32_t(std::lrint((cy + scale * (rnd() - 0.5) * (t % 89 == 0 ? 30 : 1)) * 16));
+        q.z = float(0.1 + rnd());
+        q.k = float(0.2 + 1.2 * rnd());
+      }
+      const float rgb[3] = {float(255 * rnd()), float(255 * rnd()), float(255 * rnd())};
+      for (Framebuffer& fb : fbs) fb.fill_triangle(v[0], v[1], v[2], rgb);
+    }
+    // fill_indexed over a vertex array, both row sets of a two-thread frame, culling.
+    const int nv = 3000;
+    std::vector<int32_t> X(nv), Y(nv);
+    std::vector<float> Z(nv), KF(nv), KB(nv);
+    std::vector<uint8_t> out(nv, 0);
+    for (int i = 0; i < nv; ++i) {
+      X[i] = int32_t(rnd() * W * 16);
+      Y[i] = int32_t(rnd() * H * 16);
+      Z[i] = float(0.5 + rnd());
+      KF[i] = float(rnd());
+      KB[i] = float(rnd());
+    }
+    std::vector<uint32_t> idx;
+    for (int t = 0; t < 2000; ++t) {
+      const uint32_t a = uint32_t(rnd() * nv) % nv;
+      // Neighbours in a small window: mostly small triangles.
+      const uint32_t b = (a + 1 + uint32_t(rnd() * 40)) % nv;
+      const uint32_t c = (a + 1 + uint32_t(rnd() * 40)) % nv;
+      idx.insert(idx.end(), {a, b, c});
+    }
+    for (int i = 0; i + 1 < nv; i += 2) {  // near neighbours in space too
+      X[i + 1] = X[i] + int32_t(rnd() * 64) - 32;
+      Y[i + 1] = Y[i] + int32_t(rnd() * 64) - 32;
+    }
+    const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), out.data()};
+    const float rgb[3] = {200.0f, 120.0f, 60.0f};
+    for (Framebuffer& fb : fbs) {
+      for (int part = 0; part < 2; ++part) {
+        RowSet rows;
+        rows.shift = 3;
+        rows.parts = 2;
+        rows.part = part;
+        fb.fill_indexed(va, idx.data(), idx.size() / 6, rgb, true, part == 0, rows, nullptr,
+                        nullptr);
+        fb.fill_indexed(va, idx.data() + idx.size() / 2, idx.size() / 6, rgb, false, true, rows,
+                        nullptr, nullptr);
+      }
+    }
+    std::size_t drawn = 0;
+    for (int i = 0; i < W * H; ++i) drawn += fbs[0].depth()[i] > 0;
+    EXPECT_GT(drawn, std::size_t(W * H / 2)) << "the triangles cover most of the image";
+    for (std::size_t p = 1; p < fbs.size(); ++p) {
+      EXPECT_EQ(std::memcmp(fbs[0].color(), fbs[p].color(), 4 * std::size_t(W) * H), 0)
+          << "colour, path " << int(paths[p]) << ", " << W << " x " << H;
+      EXPECT_EQ(std::memcmp(fbs[0].depth(), fbs[p].depth(), 4 * std::size_t(W) * H), 0)
+          << "depth, path " << int(paths[p]) << ", " << W << " x " << H;
+    }
+  }
+}
+
 // A box marker turns with its orientation R (a satellite bus tumbles with its base): a 2 x 0.2 x
 // 0.2 m bar is wide on screen along world x, tall once R turns its x axis onto world z, and a
 // non-rotation R draws nothing.

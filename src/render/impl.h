@@ -41,6 +41,35 @@ struct Rect {
   }
 };
 
+/// Where a frame drew: tiles of 8 x 8 pixels marked by the rectangles added (items, markers,
+/// the overlay), so that the next frame restores the background there only (separate items
+/// leave the space between them alone, as one enclosing rectangle would not).
+struct DirtyTiles {
+  static constexpr int kShift = 3;
+  int tx = 0, ty = 0;
+  std::vector<uint8_t> mark;  ///< tx * ty, row-major
+  bool any = false;
+  void resize(int width, int height) {
+    tx = (width + (1 << kShift) - 1) >> kShift;
+    ty = (height + (1 << kShift) - 1) >> kShift;
+    mark.assign(std::size_t(tx) * ty, 0);
+    any = false;
+  }
+  void add(const Rect& r) {
+    if (r.empty() || mark.empty()) return;
+    const int x0 = std::max(r.x0, 0) >> kShift, y0 = std::max(r.y0, 0) >> kShift;
+    const int x1 = std::min((r.x1 - 1) >> kShift, tx - 1);
+    const int y1 = std::min((r.y1 - 1) >> kShift, ty - 1);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) mark[std::size_t(y) * tx + x] = 1;
+    any = any || (x0 <= x1 && y0 <= y1);
+  }
+  void clear() {
+    if (any) std::fill(mark.begin(), mark.end(), uint8_t(0));
+    any = false;
+  }
+};
+
 /// One item's transform for one frame.
 struct ItemFrame {
   float m[12];           ///< rows U, V, W of P * pose * scale (clip x, y, depth), row-major 3x4
@@ -81,7 +110,7 @@ struct Renderer::Impl {
   Mat4 background_P = Mat4::Zero();
   Vec3 background_eye = Vec3::Zero();
   double background_grid[3] = {0, 0, 0};
-  Rect dirty, next_dirty;
+  DirtyTiles dirty, next_dirty;
 
   // Lighting (ambient, sun, head light).
   float ka = 0.26f, kd = 0.58f, kh = 0.22f;

@@ -11,6 +11,10 @@
 #include <emmintrin.h>
 #define SE3_PIPE_SSE2 1
 #endif
+#if SE3_PIPE_SSE2 && defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define SE3_PIPE_AVX2 1
+#endif
 
 namespace se3 {
 namespace render {
@@ -52,6 +56,80 @@ int clip_polygon_attr(const ClipPlanes& planes, ClipVertex* poly, int n) {
 inline float pos(float x) {
   return x > 0.0f ? x : 0.0f;
 }
+
+#if SE3_PIPE_AVX2
+// The vertex stage's SSE2 loop eight vertices wide (the same operations lane by lane, so the
+// same bits) from i while i + 8 <= v1; returns where it stopped.
+__attribute__((target("avx2"))) std::size_t transform_avx2(
+    const RenderMesh& mesh, std::size_t i, std::size_t v1, const float* m, float near, float xlo,
+    float xhi, float ylo, float yhi, const float L[3], const float H[3], float ka, float kd,
+    float kh, int32_t* X_, int32_t* Y_, float* Z_, float* KF_, float* KB_, uint8_t* O_) {
+  __m256 M[12];
+  for (int k = 0; k < 12; ++k) M[k] = _mm256_set1_ps(m[k]);
+  const __m256 vnear = _mm256_set1_ps(near), vsub = _mm256_set1_ps(float(kSubpixel));
+  const __m256 vxlo = _mm256_set1_ps(xlo), vxhi = _mm256_set1_ps(xhi);
+  const __m256 vylo = _mm256_set1_ps(ylo), vyhi = _mm256_set1_ps(yhi);
+  const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+  const __m256 Lx = _mm256_set1_ps(L[0]), Ly = _mm256_set1_ps(L[1]), Lz = _mm256_set1_ps(L[2]);
+  const __m256 Hx = _mm256_set1_ps(H[0]), Hy = _mm256_set1_ps(H[1]), Hz = _mm256_set1_ps(H[2]);
+  const __m256 ka8 = _mm256_set1_ps(ka), kd8 = _mm256_set1_ps(kd), kh8 = _mm256_set1_ps(kh);
+  for (; i + 8 <= v1; i += 8) {
+    const __m256 x = _mm256_loadu_ps(&mesh.px[i]), y = _mm256_loadu_ps(&mesh.py[i]),
+                 z = _mm256_loadu_ps(&mesh.pz[i]);
+    const __m256 U =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(M[0], x), _mm256_mul_ps(M[1], y)),
+                                    _mm256_mul_ps(M[2], z)),
+                      M[3]);
+    const __m256 V =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(M[4], x), _mm256_mul_ps(M[5], y)),
+                                    _mm256_mul_ps(M[6], z)),
+                      M[7]);
+    const __m256 W =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(M[8], x), _mm256_mul_ps(M[9], y)),
+                                    _mm256_mul_ps(M[10], z)),
+                      M[11]);
+    const __m256 front = _mm256_cmp_ps(W, vnear, _CMP_GE_OQ);  // false for NaN too
+    const __m256 inv = _mm256_div_ps(one, _mm256_blendv_ps(one, W, front));
+    const __m256 sx = _mm256_mul_ps(U, inv), sy = _mm256_mul_ps(V, inv);
+    const __m256i behind =
+        _mm256_andnot_si256(_mm256_castps_si256(front), _mm256_set1_epi32(kBehind));
+    const __m256i l = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(sx, vxlo, _CMP_LT_OQ)),
+                                       _mm256_set1_epi32(kLeft));
+    const __m256i r = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(sx, vxhi, _CMP_GT_OQ)),
+                                       _mm256_set1_epi32(kRight));
+    const __m256i t = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(sy, vylo, _CMP_LT_OQ)),
+                                       _mm256_set1_epi32(kTop));
+    const __m256i b = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(sy, vyhi, _CMP_GT_OQ)),
+                                       _mm256_set1_epi32(kBottom));
+    __m256i code =
+        _mm256_or_si256(_mm256_or_si256(_mm256_or_si256(l, r), _mm256_or_si256(t, b)), behind);
+    code = _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(front), code), behind);
+    const __m256i none = _mm256_cmpeq_epi32(code, _mm256_setzero_si256());
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(X_ + i),
+                        _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sx, vsub))));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(Y_ + i),
+                        _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sy, vsub))));
+    _mm256_storeu_ps(Z_ + i, _mm256_and_ps(front, inv));
+    alignas(32) int32_t codes[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(codes), code);
+    for (int k = 0; k < 8; ++k) O_[i + k] = uint8_t(codes[k]);
+    const __m256 nx = _mm256_loadu_ps(&mesh.nx[i]), ny = _mm256_loadu_ps(&mesh.ny[i]),
+                 nz = _mm256_loadu_ps(&mesh.nz[i]);
+    const __m256 dl = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(Lx, nx), _mm256_mul_ps(Ly, ny)),
+                                    _mm256_mul_ps(Lz, nz));
+    const __m256 dh = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(Hx, nx), _mm256_mul_ps(Hy, ny)),
+                                    _mm256_mul_ps(Hz, nz));
+    const __m256 kf = _mm256_add_ps(_mm256_add_ps(ka8, _mm256_mul_ps(kd8, _mm256_max_ps(dl, zero))),
+                                    _mm256_mul_ps(kh8, _mm256_max_ps(dh, zero)));
+    const __m256 kb = _mm256_add_ps(
+        _mm256_add_ps(ka8, _mm256_mul_ps(kd8, _mm256_max_ps(_mm256_sub_ps(zero, dl), zero))),
+        _mm256_mul_ps(kh8, _mm256_max_ps(_mm256_sub_ps(zero, dh), zero)));
+    _mm256_storeu_ps(KF_ + i, kf);
+    _mm256_storeu_ps(KB_ + i, kb);
+  }
+  return i;
+}
+#endif
 
 }  // namespace
 
@@ -137,6 +215,12 @@ void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size
   float* KB_ = KB.data() + f.vbase;
   uint8_t* O_ = out.data() + f.vbase;
   std::size_t i = v0;
+#if SE3_PIPE_AVX2
+  if (simd && !f.rescale && raster_best_path() == RasterPath::Avx2) {
+    i = transform_avx2(mesh, i, v1, m, near, xlo, xhi, ylo, yhi, f.L, f.H, ka, kd, kh, X_, Y_, Z_,
+                       KF_, KB_, O_);
+  }
+#endif
 #if SE3_PIPE_SSE2
   if (simd && !f.rescale) {
     const __m128 m0 = _mm_set1_ps(m[0]), m1 = _mm_set1_ps(m[1]), m2 = _mm_set1_ps(m[2]),

@@ -55,7 +55,11 @@ void Framebuffer::clear_depth_rows(int y0, int y1) {
 }
 
 void Framebuffer::set_simd(bool on) {
-  simd_ = on && raster_has_simd();
+  path_ = on ? raster_best_path() : RasterPath::Scalar;
+}
+
+void Framebuffer::set_path(RasterPath p) {
+  path_ = RasterPath(std::min(int(p), int(raster_best_path())));
 }
 
 void Framebuffer::fill_span(int y, int x0, int x1, uint32_t color) {

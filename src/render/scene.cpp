@@ -127,6 +127,11 @@ void Renderer::draw_sphere(const SE3& pose, const Vec3& size, const Eigen::Vecto
 
 namespace {
 
+std::size_t npix_tiles(int w, int h) {
+  return std::size_t((w + (1 << DirtyTiles::kShift) - 1) >> DirtyTiles::kShift) *
+         std::size_t((h + (1 << DirtyTiles::kShift) - 1) >> DirtyTiles::kShift);
+}
+
 Vec3d mix(const Vec3d& a, const Vec3d& b, double t) {
   return a + (b - a) * t;
 }
@@ -340,13 +345,28 @@ void Renderer::frame_part(int phase, int part, int parts) {
   if (phase == 1) {
     const int W = fb_.width();
     if (I.background_ok) {
-      // Only where the last frame drew: the cached background back, depth cleared.
-      const Rect& d = I.dirty;
-      for (int y = d.y0; y < d.y1; ++y) {
-        if (!rows.has(y)) continue;
-        const std::size_t at = std::size_t(y) * W + d.x0;
-        std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(d.x1 - d.x0) * 4);
-        std::memset(fb_.depth() + at, 0, std::size_t(d.x1 - d.x0) * 4);
+      // Only where the last frame drew (runs of marked tiles): the cached background back,
+      // depth cleared.
+      const DirtyTiles& d = I.dirty;
+      for (int t = 0; t < d.ty && d.any; ++t) {
+        const uint8_t* m = d.mark.data() + std::size_t(t) * d.tx;
+        for (int a = 0; a < d.tx;) {
+          if (!m[a]) {
+            ++a;
+            continue;
+          }
+          int b = a + 1;
+          while (b < d.tx && m[b]) ++b;
+          const int x0 = a << DirtyTiles::kShift, x1 = std::min(W, b << DirtyTiles::kShift);
+          const int y1 = std::min(fb_.height(), (t + 1) << DirtyTiles::kShift);
+          for (int y = t << DirtyTiles::kShift; y < y1; ++y) {
+            if (!rows.has(y)) continue;
+            const std::size_t at = std::size_t(y) * W + x0;
+            std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(x1 - x0) * 4);
+            std::memset(fb_.depth() + at, 0, std::size_t(x1 - x0) * 4);
+          }
+          a = b;
+        }
       }
     } else {
       background_rows(rows);
@@ -388,6 +408,13 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
                       const Overlay& overlay) {
   Impl& I = *impl_;
   fb_.set_simd(style_.simd);
+  std::swap(I.dirty, I.next_dirty);  // no allocation: the two buffers trade places
+  if (I.next_dirty.mark.size() != npix_tiles(fb_.width(), fb_.height())) {
+    I.dirty.resize(fb_.width(), fb_.height());  // first frame or a new size: all redrawn
+    I.next_dirty.resize(fb_.width(), fb_.height());
+    I.background_ok = false;
+  }
+  I.next_dirty.clear();
   // The cached background serves while camera and grid are as when it was drawn.
   const double grid_sig[3] = {style_.grid ? 1.0 : 0.0, style_.grid_spacing,
                               double(style_.grid_lines)};
@@ -402,8 +429,6 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
     I.background_eye = cam_.eye;
     std::copy(grid_sig, grid_sig + 3, I.background_grid);
   }
-  I.dirty = I.next_dirty;
-  I.next_dirty = Rect();
   // Item transforms (serial: a few matrix products each).
   std::size_t vbase = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {

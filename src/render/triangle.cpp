@@ -11,6 +11,13 @@
 #include <emmintrin.h>
 #define SE3_RASTER_SSE2 1
 #endif
+// AVX2 (eight pixels wide) is chosen at run time: its functions carry their own target, the
+// build itself stays at the x86-64 baseline.
+#if SE3_RASTER_SSE2 && defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define SE3_RASTER_AVX2 1
+#define SE3_AVX2 __attribute__((target("avx2")))
+#endif
 
 namespace se3 {
 namespace render {
@@ -179,14 +186,300 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
 }
 #endif
 
-// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most eight pixels
-// are drawn here pixel by pixel (most triangles of a detailed mesh; the same code serves both
-// paths), the rest go to the pixel loops.
+#if SE3_RASTER_AVX2
+// raster_sse2 eight pixels wide (the same operations lane by lane, so the same bits); needs
+// W >= 8.
+SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m256 zr, __m256 kr,
+                                __m256 zx, __m256 kx, const __m256 c[3], uint32_t* crow,
+                                float* drow) {
+  const __m256i outside = _mm256_srai_epi32(_mm256_or_si256(_mm256_or_si256(e0, e1), e2), 31);
+  const __m256 fi = _mm256_cvtepi32_ps(
+      _mm256_add_epi32(_mm256_set1_epi32(ii), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+  const __m256 z = _mm256_add_ps(zr, _mm256_mul_ps(zx, fi));
+  const __m256 d = _mm256_loadu_ps(drow);
+  const __m256 m = _mm256_andnot_ps(_mm256_castsi256_ps(outside), _mm256_cmp_ps(z, d, _CMP_GT_OQ));
+  if (!_mm256_movemask_ps(m)) return;
+  _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
+  const __m256 k = _mm256_add_ps(kr, _mm256_mul_ps(kx, fi));
+  const __m256 c255 = _mm256_set1_ps(255.0f);
+  const __m256i r = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[0], k), c255));
+  const __m256i g = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[1], k), c255));
+  const __m256i b = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[2], k), c255));
+  const __m256i px =
+      _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+  const __m256i old = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(crow));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(crow),
+                      _mm256_blendv_epi8(old, px, _mm256_castps_si256(m)));
+}
+
+SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
+  const int n = s.bx1 - s.bx0 + 1;
+  const int W = T.W;
+  const __m256 zx = _mm256_set1_ps(s.zx), kx = _mm256_set1_ps(s.kx);
+  const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  __m256i ev[3], eyv[3], ex8[3];
+  for (int k = 0; k < 3; ++k) {
+    ev[k] = _mm256_add_epi32(_mm256_set1_epi32(s.e0[k]),
+                             _mm256_mullo_epi32(lane, _mm256_set1_epi32(s.ex[k])));
+    eyv[k] = _mm256_set1_epi32(s.ey[k]);
+    ex8[k] = _mm256_set1_epi32(8 * s.ex[k]);
+  }
+  const bool border = s.bx0 + ((n + 7) & ~7) > W;
+  const bool all_rows = T.rows.parts == 1;
+  int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
+  float zrs = s.z0, krs = s.k0;
+  for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
+           zrs += s.zy, krs += s.ky, ev[0] = _mm256_add_epi32(ev[0], eyv[0]),
+           ev[1] = _mm256_add_epi32(ev[1], eyv[1]), ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+    if (!all_rows && !T.rows.has(y)) continue;
+    int i0 = 0, i1 = n - 1;
+    if (n >= kSpanMin && !row_span(er, s.ex, n, i0, i1)) continue;
+    const __m256 zr = _mm256_set1_ps(zrs), kr = _mm256_set1_ps(krs);
+    uint32_t* crow = T.color + std::size_t(y) * W + s.bx0;
+    float* drow = T.depth + std::size_t(y) * W + s.bx0;
+    if (!border) {
+      int i = i0 & ~7;
+      __m256i e0 = ev[0], e1 = ev[1], e2 = ev[2];
+      if (i) {
+        e0 = _mm256_add_epi32(e0, _mm256_set1_epi32(i * s.ex[0]));
+        e1 = _mm256_add_epi32(e1, _mm256_set1_epi32(i * s.ex[1]));
+        e2 = _mm256_add_epi32(e2, _mm256_set1_epi32(i * s.ex[2]));
+      }
+      for (; i <= i1; i += 8, e0 = _mm256_add_epi32(e0, ex8[0]), e1 = _mm256_add_epi32(e1, ex8[1]),
+                              e2 = _mm256_add_epi32(e2, ex8[2])) {
+        group_avx2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+      }
+    } else {
+      for (int i = i0 & ~7; i <= i1; i += 8) {
+        const int ii = std::min(i, W - 8 - s.bx0);
+        const __m256i e0 = _mm256_add_epi32(ev[0], _mm256_set1_epi32(ii * s.ex[0]));
+        const __m256i e1 = _mm256_add_epi32(ev[1], _mm256_set1_epi32(ii * s.ex[1]));
+        const __m256i e2 = _mm256_add_epi32(ev[2], _mm256_set1_epi32(ii * s.ex[2]));
+        group_avx2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+      }
+    }
+  }
+}
+#endif
+
+// A triangle whose box is at most 4 x 4 pixels (most triangles of a detailed mesh): which
+// centres are covered is found first, from the edge values alone; only then the planes, and
+// a pixel's z and k come straight from its three edge values (no per-row stepping).
+struct Small {
+  int bx0, by0, w, h;
+  int32_t e[3];          // edge values at the box's first centre
+  int32_t t[3];          // the same with the top-left rule folded in (covered <=> all >= 0)
+  int32_t ex[3], ey[3];  // steps per pixel
+  float z[3], k[3];      // vertices a, b, c (edge i weighs the vertex opposite it)
+  int32_t area2;         // twice the area, > 0
+};
+
+void small_scalar(const Small& q, const float rgb[3], const Target& T) {
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    for (int i = 0; i < q.w; ++i) {
+      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
+           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
+        covered |= 1u << (4 * j + i);
+      }
+    }
+  }
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const float wa = q.z[0] * inv, wb = q.z[1] * inv, wc = q.z[2] * inv;
+  const float ua = q.k[0] * inv, ub = q.k[1] * inv, uc = q.k[2] * inv;
+  for (int j = 0; j < q.h; ++j) {
+    const int y = q.by0 + j;
+    if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
+    for (int i = 0; i < q.w; ++i) {
+      if (!(covered >> (4 * j + i) & 1u)) continue;
+      const float ff0 = float(q.e[0] + i * q.ex[0] + j * q.ey[0]);
+      const float ff1 = float(q.e[1] + i * q.ex[1] + j * q.ey[1]);
+      const float ff2 = float(q.e[2] + i * q.ex[2] + j * q.ey[2]);
+      const float z = ff0 * wc + ff1 * wa + ff2 * wb;
+      const std::size_t at = std::size_t(y) * T.W + q.bx0 + i;
+      if (z > T.depth[at]) {
+        T.depth[at] = z;
+        T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
+      }
+    }
+  }
+}
+
+#if SE3_RASTER_SSE2
+// (0, s, 2 s, 3 s) + v.
+inline __m128i ramp_sse2(int32_t v, int32_t s) {
+  const __m128i sv = _mm_set1_epi32(s);
+  const __m128i r = _mm_add_epi32(_mm_add_epi32(_mm_slli_si128(sv, 4), _mm_slli_si128(sv, 8)),
+                                  _mm_slli_si128(sv, 12));
+  return _mm_add_epi32(r, _mm_set1_epi32(v));
+}
+
+// The same pixels and bits as small_scalar, a row of four at a time (needs bx0 + 4 <= W).
+void small_sse2(const Small& q, const float rgb[3], const Target& T) {
+  const __m128i s0 = ramp_sse2(q.t[0], q.ex[0]), s1 = ramp_sse2(q.t[1], q.ex[1]),
+                s2 = ramp_sse2(q.t[2], q.ex[2]);
+  __m128i a0 = s0, a1 = s1, a2 = s2;
+  const __m128i y0 = _mm_set1_epi32(q.ey[0]), y1 = _mm_set1_epi32(q.ey[1]),
+                y2 = _mm_set1_epi32(q.ey[2]);
+  const unsigned wbits = (1u << q.w) - 1;
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    const unsigned out =
+        unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_or_si128(_mm_or_si128(a0, a1), a2))));
+    covered |= (~out & wbits) << (4 * j);
+    a0 = _mm_add_epi32(a0, y0);
+    a1 = _mm_add_epi32(a1, y1);
+    a2 = _mm_add_epi32(a2, y2);
+  }
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const __m128 wa = _mm_set1_ps(q.z[0] * inv), wb = _mm_set1_ps(q.z[1] * inv),
+               wc = _mm_set1_ps(q.z[2] * inv);
+  const __m128 ua = _mm_set1_ps(q.k[0] * inv), ub = _mm_set1_ps(q.k[1] * inv),
+               uc = _mm_set1_ps(q.k[2] * inv);
+  __m128i f0 = _mm_add_epi32(s0, _mm_set1_epi32(q.e[0] - q.t[0])),
+          f1 = _mm_add_epi32(s1, _mm_set1_epi32(q.e[1] - q.t[1])),
+          f2 = _mm_add_epi32(s2, _mm_set1_epi32(q.e[2] - q.t[2]));
+  const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
+  const __m128 c255 = _mm_set1_ps(255.0f);
+  for (int j = 0; j < q.h;
+       ++j, f0 = _mm_add_epi32(f0, y0), f1 = _mm_add_epi32(f1, y1), f2 = _mm_add_epi32(f2, y2)) {
+    const int bits = int(covered >> (4 * j) & 15u);
+    const int y = q.by0 + j;
+    if (!bits || !T.rows.has(y)) continue;
+    const __m128 ff0 = _mm_cvtepi32_ps(f0), ff1 = _mm_cvtepi32_ps(f1), ff2 = _mm_cvtepi32_ps(f2);
+    const __m128 z =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, wc), _mm_mul_ps(ff1, wa)), _mm_mul_ps(ff2, wb));
+    const std::size_t at = std::size_t(y) * T.W + q.bx0;
+    float* drow = T.depth + at;
+    uint32_t* crow = T.color + at;
+    const __m128 d = _mm_loadu_ps(drow);
+    const __m128 in =
+        _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), bit), bit));
+    const __m128 m = _mm_and_ps(in, _mm_cmpgt_ps(z, d));
+    if (!_mm_movemask_ps(m)) continue;
+    _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+    const __m128 k =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, uc), _mm_mul_ps(ff1, ua)), _mm_mul_ps(ff2, ub));
+    const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[0]), k), c255));
+    const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[1]), k), c255));
+    const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[2]), k), c255));
+    const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+    const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+    const __m128i mi = _mm_castps_si128(m);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
+                     _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
+  }
+}
+#endif
+
+#if SE3_RASTER_AVX2
+// small_sse2 two rows at a time (rows j and j + 1 in the low and high halves).
+SE3_AVX2 inline __m256i pair_avx2(int32_t v, int32_t ex, int32_t ey) {
+  const __m256i i = _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3);
+  const __m256i j = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+  return _mm256_add_epi32(_mm256_set1_epi32(v),
+                          _mm256_add_epi32(_mm256_mullo_epi32(i, _mm256_set1_epi32(ex)),
+                                           _mm256_mullo_epi32(j, _mm256_set1_epi32(ey))));
+}
+
+SE3_AVX2 void small_avx2(const Small& q, const float rgb[3],
+                         const Target& T) {  // Edge values with the top-left rule (coverage) and
+                                             // without (the planes): they differ by
+  // a constant.
+  const __m256i s0 = pair_avx2(q.t[0], q.ex[0], q.ey[0]), s1 = pair_avx2(q.t[1], q.ex[1], q.ey[1]),
+                s2 = pair_avx2(q.t[2], q.ex[2], q.ey[2]);
+  __m256i a0 = s0, a1 = s1, a2 = s2;
+  const __m256i y0 = _mm256_set1_epi32(2 * q.ey[0]), y1 = _mm256_set1_epi32(2 * q.ey[1]),
+                y2 = _mm256_set1_epi32(2 * q.ey[2]);
+  const unsigned wbits = (1u << q.w) - 1;
+  // Bits of the box: w columns, h rows.
+  const unsigned box = (wbits * 0x1111u) & ((1u << (4 * q.h)) - 1);
+  const unsigned out0 = unsigned(
+      _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(a0, a1), a2))));
+  unsigned covered = ~out0 & 255u;
+  if (q.h > 2) {
+    a0 = _mm256_add_epi32(a0, y0);
+    a1 = _mm256_add_epi32(a1, y1);
+    a2 = _mm256_add_epi32(a2, y2);
+    const unsigned out1 = unsigned(
+        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(a0, a1), a2))));
+    covered |= (~out1 & 255u) << 8;
+  }
+  covered &= box;
+  if (!covered) return;
+  const float inv = 1.0f / float(q.area2);
+  const __m256 wa = _mm256_set1_ps(q.z[0] * inv), wb = _mm256_set1_ps(q.z[1] * inv),
+               wc = _mm256_set1_ps(q.z[2] * inv);
+  const __m256 ua = _mm256_set1_ps(q.k[0] * inv), ub = _mm256_set1_ps(q.k[1] * inv),
+               uc = _mm256_set1_ps(q.k[2] * inv);
+  __m256i f0 = _mm256_add_epi32(s0, _mm256_set1_epi32(q.e[0] - q.t[0])),
+          f1 = _mm256_add_epi32(s1, _mm256_set1_epi32(q.e[1] - q.t[1])),
+          f2 = _mm256_add_epi32(s2, _mm256_set1_epi32(q.e[2] - q.t[2]));
+  const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 c255 = _mm256_set1_ps(255.0f);
+  for (int j = 0; j < q.h; j += 2, f0 = _mm256_add_epi32(f0, y0), f1 = _mm256_add_epi32(f1, y1),
+           f2 = _mm256_add_epi32(f2, y2)) {
+    unsigned bits = covered >> (4 * j) & 255u;
+    const int y = q.by0 + j;
+    if (!T.rows.has(y)) bits &= 0xf0u;
+    if (!T.rows.has(y + 1)) bits &= 0x0fu;  // also no row y + 1 in the box (bits are 0)
+    if (!bits) continue;
+    const __m256 ff0 = _mm256_cvtepi32_ps(f0), ff1 = _mm256_cvtepi32_ps(f1),
+                 ff2 = _mm256_cvtepi32_ps(f2);
+    const __m256 z = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, wc), _mm256_mul_ps(ff1, wa)),
+                                   _mm256_mul_ps(ff2, wb));
+    const std::size_t at = std::size_t(y) * T.W + q.bx0;
+    float* d0 = T.depth + at;
+    uint32_t* c0 = T.color + at;
+    // The second row only where it has pixels to draw (it may lie past the image).
+    const bool two = bits > 15u;
+    float* d1 = two ? d0 + T.W : d0;
+    uint32_t* c1 = two ? c0 + T.W : c0;
+    const __m256 d =
+        _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(d0)), _mm_loadu_ps(d1), 1);
+    const __m256 in = _mm256_castsi256_ps(
+        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(bits)), bit), bit));
+    const __m256 m = _mm256_and_ps(in, _mm256_cmp_ps(z, d, _CMP_GT_OQ));
+    const unsigned mm = unsigned(_mm256_movemask_ps(m));
+    if (!mm) continue;
+    const __m256 dn = _mm256_blendv_ps(d, z, m);
+    const __m256 k = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
+                                   _mm256_mul_ps(ff2, ub));
+    const __m256i r =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[0]), k), c255));
+    const __m256i g =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[1]), k), c255));
+    const __m256i b =
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[2]), k), c255));
+    const __m256i px =
+        _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+    const __m256i old = _mm256_inserti128_si256(
+        _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c0))),
+        _mm_loadu_si128(reinterpret_cast<const __m128i*>(c1)), 1);
+    const __m256i cn = _mm256_blendv_epi8(old, px, _mm256_castps_si256(m));
+    if (mm & 15u) {
+      _mm_storeu_ps(d0, _mm256_castps256_ps128(dn));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(c0), _mm256_castsi256_si128(cn));
+    }
+    if (mm > 15u) {
+      _mm_storeu_ps(d1, _mm256_extractf128_ps(dn, 1));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(c1), _mm256_extracti128_si256(cn, 1));
+    }
+  }
+}
+#endif
+
+// One triangle (vertices in sub-pixels, extent at most 2^14): boxes of at most 4 x 4 pixels
+// go to the small-triangle path, the rest to the pixel loops.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
-              const float rgb[3], const Target& T, bool simd);
+              const float rgb[3], const Target& T, int path);
 constexpr int32_t kMaxExtent = 1 << 14;
 
-template <bool kSimd>
+// kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
+template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
@@ -197,7 +490,7 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   const int32_t minx = std::min(ax_, std::min(bx_, cx_)), maxx = std::max(ax_, std::max(bx_, cx_));
   const int32_t miny = std::min(ay_, std::min(by_, cy_)), maxy = std::max(ay_, std::max(by_, cy_));
   if (maxx - minx > kMaxExtent || maxy - miny > kMaxExtent) {
-    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kSimd);
+    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kPath);
     return;
   }
   // Pixels whose centre (16 i + 8) lies in [min, max]: arithmetic shifts round down.
@@ -233,40 +526,36 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
   const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
   const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
-  if (w <= 4 && h <= 4 && w * h <= 8) {
-    // Which of the (at most eight) centres are covered; only then the planes.
-    unsigned covered = 0;
-    for (int j = 0; j < h; ++j) {
-      const int32_t sy = kSubpixel * j;
-      for (int i = 0; i < w; ++i) {
-        const int32_t sx = kSubpixel * i;
-        if (((t0 + sx * dy0 - sy * dx0) | (t1 + sx * dy1 - sy * dx1) |
-             (t2 + sx * dy2 - sy * dx2)) >= 0) {
-          covered |= 1u << (4 * j + i);
-        }
-      }
+  if (w <= 4 && h <= 4) {
+    const Small q{bx0,
+                  by0,
+                  w,
+                  h,
+                  {e0, e1, e2},
+                  {t0, t1, t2},
+                  {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
+                  {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
+                  {az, bz, cz},
+                  {ak, bk, ck},
+                  -area};
+    // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
+    if (w * h <= 2) {
+      small_scalar(q, rgb, T);
+      return;
     }
-    if (!covered) return;
-    const float inv = 1.0f / float(-area);
-    const float wa = az * inv, wb = bz * inv, wc = cz * inv;
-    const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
-    for (int j = 0; j < h; ++j) {
-      const int y = by0 + j;
-      if (!(covered >> (4 * j) & 15u) || !T.rows.has(y)) continue;
-      const int32_t sy = kSubpixel * j;
-      for (int i = 0; i < w; ++i) {
-        if (!(covered >> (4 * j + i) & 1u)) continue;
-        const int32_t sx = kSubpixel * i;
-        const float ff0 = float(e0 + sx * dy0 - sy * dx0), ff1 = float(e1 + sx * dy1 - sy * dx1);
-        const float ff2 = float(e2 + sx * dy2 - sy * dx2);
-        const float z = ff0 * wc + ff1 * wa + ff2 * wb;
-        const std::size_t at = std::size_t(y) * T.W + bx0 + i;
-        if (z > T.depth[at]) {
-          T.depth[at] = z;
-          T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
-        }
-      }
+#if SE3_RASTER_AVX2
+    if (kPath == 2 && bx0 + 4 <= T.W) {
+      small_avx2(q, rgb, T);
+      return;
     }
+#endif
+#if SE3_RASTER_SSE2
+    if (kPath >= 1 && bx0 + 4 <= T.W) {
+      small_sse2(q, rgb, T);
+      return;
+    }
+#endif
+    small_scalar(q, rgb, T);
     return;
   }
   const float inv = 1.0f / float(-area);
@@ -295,8 +584,14 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   s.k0 = fe0 * uc + fe1 * ua + fe2 * ub;
   s.kx = fx0 * uc + fx1 * ua + fx2 * ub;
   s.ky = fy0 * uc + fy1 * ua + fy2 * ub;
+#if SE3_RASTER_AVX2
+  if (kPath == 2) {
+    raster_avx2(s, rgb, T);
+    return;
+  }
+#endif
 #if SE3_RASTER_SSE2
-  if (kSimd) {
+  if (kPath >= 1) {
     raster_sse2(s, rgb, T);
     return;
   }
@@ -307,7 +602,7 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
 // Draws a triangle of any extent: one larger than 2^14 sub-pixels (1024 pixels: a big image,
 // a near face) is drawn as four, which share their new edges exactly.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
-              const float rgb[3], const Target& T, bool simd) {
+              const float rgb[3], const Target& T, int path) {
   const int64_t ext =
       std::max(int64_t(std::max(a.x, std::max(b.x, c.x))) - std::min(a.x, std::min(b.x, c.x)),
                int64_t(std::max(a.y, std::max(b.y, c.y))) - std::min(a.y, std::min(b.y, c.y)));
@@ -321,22 +616,28 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
       return m;
     };
     const RasterVertex ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-    draw_any(a, ab, ca, rgb, T, simd);
-    draw_any(ab, b, bc, rgb, T, simd);
-    draw_any(ca, bc, c, rgb, T, simd);
-    draw_any(ab, bc, ca, rgb, T, simd);
+    draw_any(a, ab, ca, rgb, T, path);
+    draw_any(ab, b, bc, rgb, T, path);
+    draw_any(ca, bc, c, rgb, T, path);
+    draw_any(ab, bc, ca, rgb, T, path);
     return;
   }
-  if (simd) {
-    draw_triangle<true>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  if (path == 2) {
+    draw_triangle<2>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+  } else if (path == 1) {
+    draw_triangle<1>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
   } else {
-    draw_triangle<false>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
+    draw_triangle<0>(a.x, a.y, a.z, a.k, b.x, b.y, b.z, b.k, c.x, c.y, c.z, c.k, rgb, T);
   }
 }
 
-template <bool kSimd>
-std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3],
-                    bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline std::size_t
+indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3], bool cull,
+        bool outward, const Target& T, ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
   const uint32_t* end = t + 3 * count;
   for (; t < end; t += 3) {
@@ -354,10 +655,20 @@ std::size_t indexed(const VertexArrays& v, const uint32_t* t, std::size_t count,
     if (!front && cull) continue;
     ++drawn;
     const float* k = front ? v.kf : v.kb;
-    draw_triangle<kSimd>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+    draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
   }
   return drawn;
 }
+
+#if SE3_RASTER_AVX2
+// The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
+SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t,
+                                                           std::size_t count, const float rgb[3],
+                                                           bool cull, bool outward, const Target& T,
+                                                           ClipCallback clip, void* ctx) {
+  return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
+}
+#endif
 
 }  // namespace
 
@@ -369,20 +680,44 @@ bool raster_has_simd() {
 #endif
 }
 
+RasterPath raster_best_path() {
+#if SE3_RASTER_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return RasterPath::Avx2;
+#endif
+  return raster_has_simd() ? RasterPath::Sse2 : RasterPath::Scalar;
+}
+
+// The path a frame of this width can take: the wide ones load whole groups of a row.
+int Framebuffer::usable_path() const {
+  int p = int(path_);
+  if (p == 2 && width_ < 8) p = 1;
+  if (p == 1 && width_ < 4) p = 0;
+  return p;
+}
+
 void Framebuffer::fill_triangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                                 const float rgb[3], const RowSet& rows) {
   const Target T{width_, height_, color_.data(), depth_.data(), rows};
-  draw_any(a, b, c, rgb, T, simd_ && width_ >= 4);
+  draw_any(a, b, c, rgb, T, usable_path());
 }
 
 std::size_t Framebuffer::fill_indexed(const VertexArrays& v, const uint32_t* idx, std::size_t count,
                                       const float rgb[3], bool cull, bool outward,
                                       const RowSet& rows, ClipCallback clip, void* ctx) {
   const Target T{width_, height_, color_.data(), depth_.data(), rows};
-#if SE3_RASTER_SSE2
-  if (simd_ && width_ >= 4) return indexed<true>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+  switch (usable_path()) {
+#if SE3_RASTER_AVX2
+    case 2:
+      return indexed_avx2(v, idx, count, rgb, cull, outward, T, clip, ctx);
 #endif
-  return indexed<false>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+#if SE3_RASTER_SSE2
+    case 1:
+      return indexed<1>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+#endif
+    default:
+      return indexed<0>(v, idx, count, rgb, cull, outward, T, clip, ctx);
+  }
 }
 
 void Framebuffer::fill_triangle(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c,

@@ -7,8 +7,8 @@
 // that share an edge cover each pixel along it once. Inverse depth and the shade factor are
 // affine in screen space and are interpolated from the snapped vertices. Rows of a frame can be
 // shared out between threads (RowSet): a triangle touches only the rows of its thread.
-// There is one SSE2 path (x86-64 baseline) and a portable scalar path; both produce the same
-// bits (tested), Framebuffer::set_simd(false) selects the scalar one.
+// There are SSE2 (x86-64 baseline) and AVX2 (run-time choice) paths and a portable scalar
+// path; all produce the same bits (tested), Framebuffer::set_simd(false) selects the scalar one.
 #pragma once
 
 #include <cstddef>
@@ -71,6 +71,12 @@ using ClipCallback = std::size_t (*)(void* ctx, uint32_t a, uint32_t b, uint32_t
 /// Whether this build has the SSE2 path.
 bool raster_has_simd();
 
+/// The triangle loops: portable scalar, SSE2 (four pixels wide, x86-64 baseline), AVX2 (eight
+/// wide, chosen at run time where the CPU has it). All give the same bits.
+enum class RasterPath { Scalar = 0, Sse2 = 1, Avx2 = 2 };
+/// The widest path of this build on this CPU.
+RasterPath raster_best_path();
+
 class Framebuffer {
  public:
   Framebuffer(int width = 1280, int height = 1024) { resize(width, height); }
@@ -86,9 +92,12 @@ class Framebuffer {
   uint32_t pixel(int x, int y) const { return color_[std::size_t(y) * width_ + x]; }
   Rgb rgb(int x, int y) const;
 
-  /// SSE2 (default where built) or the scalar path; both give the same pixels.
+  /// The widest SIMD path (default) or the scalar one; all give the same pixels.
   void set_simd(bool on);
-  bool simd() const { return simd_; }
+  bool simd() const { return path_ != RasterPath::Scalar; }
+  /// One path (at most raster_best_path(); narrower images fall back to narrower paths).
+  void set_path(RasterPath p);
+  RasterPath path() const { return path_; }
 
   /// Depth to 0 (everything infinitely far).
   void clear_depth();
@@ -130,7 +139,8 @@ class Framebuffer {
 
  private:
   int width_ = 0, height_ = 0;
-  bool simd_ = true;
+  RasterPath path_ = raster_best_path();
+  int usable_path() const;
   std::vector<uint32_t> color_;
   std::vector<float> depth_;
 };
