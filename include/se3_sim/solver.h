@@ -44,6 +44,7 @@ struct SolverStats {
   double change = 0;      ///< largest impulse change of the last sweep
   int rank = 0;           ///< solve_equality: numerical rank
   bool singular = false;  ///< solve_equality took the pseudo-inverse
+  bool fallback = false;  ///< solve_active_set did not settle: PGS from the warm start solved it
 };
 
 /// What the solvers keep between calls (sized for at most `capacity` rows).
@@ -52,6 +53,7 @@ struct SolverWorkspace {
   Eigen::SelfAdjointEigenSolver<MatX> eig;
   MatX A;                            ///< active-set system (capacity x capacity)
   VecX x, r;                         ///< active-set unknowns, residuals
+  VecX p0;                           ///< active-set: the warm start (for its PGS fallback)
   std::vector<int> var, piv;         ///< active-set variable rows, LU pivots
   std::vector<int> slot;             ///< per row: its column in the active-set system (or -1)
   std::vector<int> state;            ///< per row: the active-set guess

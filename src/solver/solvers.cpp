@@ -80,6 +80,7 @@ void SolverWorkspace::reserve(int capacity, int equality_rows) {
   A = MatX::Zero(capacity, capacity);
   x = VecX::Zero(capacity);
   r = VecX::Zero(capacity);
+  p0 = VecX::Zero(capacity);
   var.assign(capacity, 0);
   piv.assign(capacity, 0);
   slot.assign(capacity, -1);
@@ -173,8 +174,10 @@ SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows&
   if (static_cast<int>(ws.state.size()) < n) {
     throw std::length_error("solve_active_set: workspace smaller than the rows");
   }
-  constexpr double kVelTol = 1e-9;   // m/s: residuals below this count as zero
-  constexpr double kImpTol = 1e-12;  // N s
+  constexpr double kVelTol = 1e-9;              // m/s: residuals below this count as zero
+  constexpr double kImpTol = 1e-12;             // N s
+  for (int r = 0; r < n; ++r) ws.p0[r] = p[r];  // the warm start, for the fallback below
+  bool converged = false;
   // First guess from the warm start (or, without one, from the free residual).
   for (int r = 0; r < n; ++r) {
     const RowType t = rows.type[r];
@@ -230,7 +233,7 @@ SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows&
     }
     // LU, not Cholesky, also when no contact slides: on panda_push the Cholesky solution of the
     // same (nearly singular) system sent the box flying (110 m in 2 s) where LU's does not.
-    if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // left to the polish below
+    if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // the fallback below
     for (int r = 0; r < n; ++r) p[r] = 0;
     for (int i = 0; i < m; ++i) p[ws.var[i]] = ws.x[i];
     for (int r = 0; r < n; ++r) {
@@ -278,12 +281,24 @@ SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows&
         }
       }
     }
-    if (!changed) break;
+    if (!changed) {
+      converged = true;
+      break;
+    }
   }
   st.iterations = std::min(it, opt.active_set_iterations);
-  // A few PGS sweeps from the direct solution: feasible to rounding whatever the guesses were.
+  for (int r = 0; r < n && converged; ++r) converged = std::isfinite(p[r]);
+  // Guesses that never settled (a sliding contact's direction cycling, a singular system) leave
+  // an iterate that is not a solution: sliding boxes on a stack were thrown kilometres. Then
+  // projected Gauss-Seidel from the warm start with its full sweeps solves the step instead;
+  // otherwise a few sweeps from the direct solution make it feasible to rounding.
   SolverOptions polish = opt;
-  polish.iterations = std::max(1, opt.polish_sweeps);
+  if (converged) {
+    polish.iterations = std::max(1, opt.polish_sweeps);
+  } else {
+    for (int r = 0; r < n; ++r) p[r] = ws.p0[r];
+    st.fallback = true;
+  }
   const SolverStats ps = solve_pgs(W, c, rows, p, polish);
   st.change = ps.change;
   return st;
