@@ -13,6 +13,9 @@
 // scene's position controllers run on MuJoCo's side as the same PIDs (se3::Pid) on
 // qfrc_applied, outside the timed mj_step.
 //   devel/lib/se3_sim/bench_contact [scene.yaml ...]   (default: the shipped contact scenes)
+//   devel/lib/se3_sim/bench_contact --study OUT.csv    (the contact part of the speed-accuracy
+//                                                       study; scripts/charts.sh charts it)
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,6 +24,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <memory>
@@ -353,8 +357,155 @@ Figures theirs(const std::string&) {
 
 }  // namespace
 
+// ------------------------------------------------------------------ the contact study
+// The contact part of the study of Erez, Tassa and Todorov (ICRA 2015; the other models are in
+// tools/charts): a pile in motion, the box stack with its top box thrown sideways and spinning
+// (v = 2 m/s along x, w = 5 rad/s about z) so that it slides, tips off and lands, simulated for
+// 1 s at steps of 4 .. 0.25 ms by each engine. Measured as the paper measures: speed (simulated
+// seconds per CPU second of the steps), consistency (the largest distance between a free
+// object's final position and the same engine's at a 16x smaller step than the smallest) and the
+// deepest penetration over the run. Ours: the scene's contact scheme (contact_semi_implicit,
+// active set); MuJoCo 2.2: Euler and RK4 with its default Newton solver, elliptic cones.
+namespace {
+
+constexpr double kStudyT = 1.0;
+
+double cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+struct StudyRun {
+  std::vector<Vec3> final_positions;  // free objects, in scene order
+  double cpu = 0, penetration = 0;
+  bool ok = true;
+};
+
+Scene study_scene(const std::string& file, double dt) {
+  Scene sc = load_scene(file);
+  sc.dt = dt;
+  SceneObject& top = sc.objects.back();
+  top.twist << 0, 0, 5, 2, 0, 0;  // body frame [w; v]; the box starts unrotated
+  return sc;
+}
+
+StudyRun study_ours(const std::string& file, double dt) {
+  StudyRun r;
+  auto sim = make_simulator(study_scene(file, dt));
+  const int n = static_cast<int>(std::lround(kStudyT / dt));
+  const double t0 = cpu_seconds();
+  for (int k = 0; k < n && r.ok; ++k) r.ok = sim->step();
+  r.cpu = cpu_seconds() - t0;
+  r.penetration = sim->penetration_max();
+  for (const ObjectState& o : sim->objects())
+    if (!o.is_static) r.final_positions.push_back(o.pose.p);
+  return r;
+}
+
+#ifdef SE3_SIM_HAVE_MUJOCO
+StudyRun study_mujoco(const std::string& file, double dt, int integrator) {
+  StudyRun r;
+  const Scene sc = study_scene(file, dt);
+  char err[1000] = "";
+  mjModel* m = load_objects(sc, err, sizeof err);
+  if (!m) {
+    r.ok = false;
+    return r;
+  }
+  m->opt.timestep = dt;
+  for (int k = 0; k < 3; ++k) m->opt.gravity[k] = sc.gravity[k];
+  m->opt.cone = mjCONE_ELLIPTIC;
+  m->opt.integrator = integrator;
+  mjData* d = mj_makeData(m);
+  // MuJoCo's free joint: linear velocity in the world, angular in the body frame; the objects
+  // start unrotated, so both are the scene's body-frame twist.
+  int j = 0;
+  std::vector<int> bodies;
+  for (const SceneObject& o : sc.objects) {
+    if (o.is_static) continue;
+    const int b = mj_name2id(m, mjOBJ_BODY, ("obj" + std::to_string(j++)).c_str());
+    bodies.push_back(b);
+    mjtNum* qv = d->qvel + m->body_dofadr[b];
+    for (int k = 0; k < 3; ++k) qv[k] = o.twist[3 + k], qv[3 + k] = o.twist[k];
+  }
+  mj_forward(m, d);
+  const int n = static_cast<int>(std::lround(kStudyT / dt));
+  double pen = 0;
+  const double t0 = cpu_seconds();
+  double outside = 0;
+  for (int k = 0; k < n; ++k) {
+    mj_step(m, d);
+    const double t1 = cpu_seconds();
+    for (int c = 0; c < d->ncon; ++c) pen = std::max(pen, -d->contact[c].dist);
+    outside += cpu_seconds() - t1;
+  }
+  r.cpu = cpu_seconds() - t0 - outside;
+  r.penetration = pen;
+  for (int b : bodies) {
+    const Vec3 p(d->xpos[3 * b], d->xpos[3 * b + 1], d->xpos[3 * b + 2]);
+    r.ok = r.ok && p.allFinite();
+    r.final_positions.push_back(p);
+  }
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  return r;
+}
+#endif
+
+double consistency(const StudyRun& a, const StudyRun& ref) {
+  if (!a.ok || !ref.ok || a.final_positions.size() != ref.final_positions.size()) return NAN;
+  double e = 0;
+  for (std::size_t k = 0; k < a.final_positions.size(); ++k)
+    e = std::max(e, (a.final_positions[k] - ref.final_positions[k]).norm());
+  return e;
+}
+
+// Writes the study's rows (the columns of tools/charts' study.csv, plus penetration) to `out`.
+int contact_study(const std::string& file, const std::string& out) {
+  std::ofstream f(out);
+  if (!f) {
+    std::fprintf(stderr, "bench_contact: cannot write %s\n", out.c_str());
+    return 1;
+  }
+  f << "model,engine,dt,rtf,consistency,penetration,ok\n";
+  const std::vector<double> dts = {4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4};
+  const double dt_ref = dts.back() / 16;
+  struct Engine {
+    std::string name;
+    std::function<StudyRun(double)> run;
+  };
+  std::vector<Engine> engines = {
+      {"contact_semi_implicit", [&](double dt) { return study_ours(file, dt); }}};
+#ifdef SE3_SIM_HAVE_MUJOCO
+  engines.push_back(
+      {"mujoco_euler", [&](double dt) { return study_mujoco(file, dt, mjINT_EULER); }});
+  engines.push_back({"mujoco_rk4", [&](double dt) { return study_mujoco(file, dt, mjINT_RK4); }});
+#endif
+  std::printf("contact study: %s, top box thrown (2 m/s, 5 rad/s), T = %g s, reference dt %g\n",
+              file.c_str(), kStudyT, dt_ref);
+  for (const Engine& e : engines) {
+    const StudyRun ref = e.run(dt_ref);
+    for (double dt : dts) {
+      const StudyRun r = e.run(dt);
+      const double rtf = r.cpu > 0 ? kStudyT / r.cpu : NAN;
+      const double c = consistency(r, ref);
+      f << "box_pile," << e.name << "," << dt << "," << rtf << "," << c << "," << r.penetration
+        << "," << (r.ok ? 1 : 0) << "\n";
+      std::printf("  %-22s dt %-7g rtf %8.3g  consistency %9.3g m  deepest %9.3g m%s\n",
+                  e.name.c_str(), dt, rtf, c, r.penetration, r.ok ? "" : "  [failed]");
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   const std::string dir = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  if (argc == 3 && std::string(argv[1]) == "--study") {
+    return contact_study(dir + "box_stack.yaml", argv[2]);
+  }
   std::vector<std::string> files;
   for (int a = 1; a < argc; ++a) files.push_back(argv[a]);
   if (files.empty()) {

@@ -52,9 +52,7 @@ std::string g_robots;
 
 std::string robots_dir() {
   if (!g_robots.empty()) return g_robots;
-  std::string src = __FILE__;
-  const size_t cut = src.rfind("/bench/");
-  return (cut == std::string::npos ? std::string(".") : src.substr(0, cut)) + "/data/robots";
+  return std::string(SE3_SIM_SOURCE_DIR) + "/data/robots";  // the package's, set by CMake
 }
 
 // ---------------------------------------------------------------- scenes

@@ -28,5 +28,18 @@ rm -rf "$data"
 mkdir -p "$data" "$repo/docs/charts"
 start=$(date +%s)
 "$bin" "$data" --root "$repo" "$@" | tee "$data/summary.txt"
+# The study's contact scene comes from bench_contact (MuJoCo beside ours), with --only study or all.
+contact_bin=$(dirname "$bin")/bench_contact
+case " $* " in
+  *" --only "*) [[ " $* " == *" --only study "* ]] && want_contact=1 || want_contact=0 ;;
+  *) want_contact=1 ;;
+esac
+if ((want_contact)); then
+  if [[ -x "$contact_bin" ]]; then
+    "$contact_bin" --study "$data/study_contact.csv" | tee -a "$data/summary.txt"
+  else
+    echo "charts: $contact_bin not found; the contact study is left out"
+  fi
+fi
 /usr/bin/python3 "$repo/scripts/plot_charts.py" "$data" "$repo/docs/charts"
 echo "charts: docs/charts/*.png written in $(( $(date +%s) - start )) s (data and summary in $data)"

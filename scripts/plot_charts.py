@@ -27,6 +27,7 @@ STYLE = {
     "mujoco_rk4": ("tab:cyan", "*"),
     "mujoco_implicit": ("tab:olive", "X"),
     "dart_euler": ("black", "d"),
+    "contact_semi_implicit": ("tab:orange", "s"),
 }
 # symplectic_euler is symplectic only for a constant mass matrix: it is the semi-implicit Euler
 # step (MuJoCo's name), under either registry name.
@@ -43,6 +44,7 @@ LABELS = {
     "mujoco_rk4": "MuJoCo 2.2 RK4",
     "mujoco_implicit": "MuJoCo 2.2 implicit",
     "dart_euler": "DART 6.12 semi-implicit Euler",
+    "contact_semi_implicit": "se3_sim contact semi-implicit (active set)",
 }
 
 
@@ -228,6 +230,42 @@ def study(data_dir, out_dir):
         plt.close(fig)
 
 
+def study_contact(data_dir, out_dir):
+    """The study's contact scene (bench_contact --study): consistency and penetration, speed on x."""
+    rows = read(os.path.join(data_dir, "study_contact.csv"))
+    names = []
+    for r in rows:
+        if r["engine"] not in names:
+            names.append(r["engine"])
+    panels = [("consistency", "consistency: max |p(T) - p_ref(T)| of a box (m)\n"
+               "p_ref: the same engine, 16x smaller step"),
+              ("penetration", "deepest penetration over the run (m)")]
+    fig, axes = plt.subplots(1, 2, figsize=(15, 5.6), squeeze=False)
+    for ax, (key, ylabel) in zip(axes[0], panels):
+        for name in names:
+            pts = [r for r in rows if r["engine"] == name and r["ok"] == "1"
+                   and math.isfinite(num(r[key]))]
+            if not pts:
+                continue
+            color, marker = STYLE.get(name, ("black", "."))
+            ax.loglog([num(p["rtf"]) for p in pts], [max(num(p[key]), 1e-17) for p in pts],
+                      color=color, marker=marker, ls=line_style(name), label=label_of(name),
+                      lw=1.3, ms=5)
+            for p in pts:
+                ax.annotate("%g" % num(p["dt"]), (num(p["rtf"]), max(num(p[key]), 1e-17)),
+                            fontsize=5, alpha=0.6, xytext=(2, 2), textcoords="offset points")
+        ax.set_xlabel("speed: simulated seconds per CPU second (steps of 2.5e-4 .. 4e-3 s)")
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Contact: a pile of three boxes, the top one thrown (2 m/s, 5 rad/s), 1 s\n"
+                 "(the measures of Erez, Tassa, Todorov, ICRA 2015; se3_sim and MuJoCo 2.2 in "
+                 "one run)", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "study_contact.png"), dpi=90)
+    plt.close(fig)
+
+
 def stability(data_dir, out_dir):
     rows = read(os.path.join(data_dir, "stability_panda.csv"))
     path_minv = os.path.join(data_dir, "stability_minv.csv")
@@ -292,6 +330,8 @@ def main():
         dynamics(data_dir, out_dir)
     if os.path.exists(os.path.join(data_dir, "study.csv")):
         study(data_dir, out_dir)
+    if os.path.exists(os.path.join(data_dir, "study_contact.csv")):
+        study_contact(data_dir, out_dir)
     if os.path.exists(os.path.join(data_dir, "stability_panda.csv")):
         stability(data_dir, out_dir)
 

@@ -274,11 +274,9 @@ void study(const std::string& outdir, const std::string& root, bool quick) {
       }
     }
   }
-  // Contact (a grasp or a pile, as in the paper): the hook for the contact issue (phase 2).
-  // When the collision and constraint layers land, a contact scene joins `models` here with
-  // its own engines (ours: the contact time-stepping scheme; MuJoCo with mjDSBL_CONTACT
-  // cleared; DART with its collision detector), measured by consistency and penetration.
-  std::printf("  contact scene: not measured yet (needs the contact issue, phase 2)\n");
+  // The study's contact scene (a pile, as in the paper) is bench_contact --study, which runs
+  // MuJoCo's contact beside ours; scripts/charts.sh runs it after this program.
+  std::printf("  contact scene: bench_contact --study (scripts/charts.sh runs it)\n");
 }
 
 // ------------------------------------------------------------------ stability
