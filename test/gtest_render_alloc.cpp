@@ -151,7 +151,7 @@ TEST(RenderAlloc, FramesWithOverlayMarkersAndThreadsAllocateNothing) {
   const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
   ASSERT_TRUE(g.warnings.empty());
   Data d(m);
-  std::vector<Marker> markers(5);
+  std::vector<Marker> markers(6);
   markers[0].type = Marker::Type::Box;
   markers[0].a = Vec3(0.3, 0.3, 0.1);
   markers[1].type = Marker::Type::Arrow;
@@ -162,6 +162,9 @@ TEST(RenderAlloc, FramesWithOverlayMarkersAndThreadsAllocateNothing) {
   markers[3].b = Vec3(0, 0, 0.8);
   markers[4].type = Marker::Type::Sphere;
   markers[4].a = Vec3(0, 0.3, 0.5);
+  markers[5].type = Marker::Type::Cylinder;  // a scene object's cylinder (or capsule's middle)
+  markers[5].a = Vec3(-0.3, 0.2, 0.3);
+  markers[5].size3 = Vec3(0.1, 0.1, 0.3);
   Overlay ov;
   ov.sim_time = 1.0;
   ov.real_time_factor = 0.99;

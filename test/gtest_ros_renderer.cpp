@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 
+#include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/renderer_convert.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
@@ -123,6 +124,104 @@ TEST(RosRenderer, SimMarkersAndCameraCommand) {
   rr::apply_camera_command(t, cam);
   EXPECT_NEAR((cam.eye - cam.target).norm(), 0.5 * d0, 1e-9);
   EXPECT_TRUE(cam.P.allFinite());
+}
+
+// Scene objects as the simulator publishes them on sim_markers (append_object_markers: a
+// cylinder as CYLINDER, a capsule as a CYLINDER and two SPHEREs) and the renderer node draws
+// them (append_markers, Renderer): the pixels that differ from the background are the
+// object's colour and their bounding box is the projection of the exact shape (points on its
+// rims and end spheres through the camera) within 2 px; the capsule's middle is filled, not
+// only its end balls.
+TEST(RosRenderer, SceneCylindersAndCapsulesAreDrawnWhereTheyProject) {
+  render::Camera cam;
+  cam.width = 320;
+  cam.height = 240;
+  cam.focal_px = 300;
+  cam.eye = Vec3(3, 0, 0.6);
+  cam.target = Vec3(0, 0, 0.6);
+  cam.update();
+  const double r = 0.2, l = 0.6;
+  // Axis z of the shape along world y, then turned 0.4 rad about world z.
+  const Mat3 R =
+      (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) * Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()))
+          .toRotationMatrix();
+  const SE3 pose(R, Vec3(0, 0, 0.6));
+  for (const bool capsule : {false, true}) {
+    SCOPED_TRACE(capsule ? "capsule" : "cylinder");
+    SceneObject o;
+    o.name = "thing";
+    o.shape = capsule ? make_capsule(r, l) : make_cylinder(r, l);
+    o.material.rgba = Vec4f(0.9f, 0.1f, 0.1f, 1.0f);
+    o.material.has_color = true;
+    ObjectState st;
+    st.name = o.name;
+    st.pose = pose;
+    visualization_msgs::MarkerArray arr;
+    se3_ros::append_object_markers({o}, {st}, "world", ros::Time(), arr);
+    ASSERT_EQ(arr.markers.size(), capsule ? 3u : 1u);
+    std::vector<render::Marker> markers;
+    for (const auto& m : arr.markers) rr::append_markers(m, SE3(), markers);
+    ASSERT_EQ(markers.size(), arr.markers.size());
+
+    render::Renderer ren(cam);
+    ren.style().grid = false;
+    ren.style().overlay = false;
+    ren.render({}, markers);
+    // The drawn pixels: their bounding box, all of them red.
+    int x0 = cam.width, y0 = cam.height, x1 = -1, y1 = -1, drawn = 0, red = 0;
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        if (ren.framebuffer().pixel(x, y) == ren.background(x, y)) continue;
+        ++drawn;
+        const render::Rgb q = ren.framebuffer().rgb(x, y);
+        red += int(q.r) > int(q.g) + 40 && int(q.r) > int(q.b) + 40;
+        x0 = std::min(x0, x);
+        y0 = std::min(y0, y);
+        x1 = std::max(x1, x);
+        y1 = std::max(y1, y);
+      }
+    }
+    ASSERT_GT(drawn, 0);
+    EXPECT_EQ(red, drawn);
+    // The exact silhouette's bounding box: a cylinder is the hull of its two rims, a capsule
+    // the hull of its two end spheres.
+    double px0 = 1e9, py0 = 1e9, px1 = -1e9, py1 = -1e9;
+    auto add = [&](const Vec3& local) {
+      render::Vec2 px;
+      ASSERT_TRUE(cam.project(pose.act(local), px));
+      px0 = std::min(px0, px.x());
+      py0 = std::min(py0, px.y());
+      px1 = std::max(px1, px.x());
+      py1 = std::max(py1, px.y());
+    };
+    const int n = 360;
+    for (int i = 0; i < n; ++i) {
+      const double t = 2 * M_PI * i / n;
+      for (const double z : {-0.5 * l, 0.5 * l}) {
+        if (!capsule) {
+          add(Vec3(r * std::cos(t), r * std::sin(t), z));
+          continue;
+        }
+        for (int j = 0; j <= n / 2; ++j) {
+          const double u = M_PI * j / (n / 2);
+          add(Vec3(r * std::sin(u) * std::cos(t), r * std::sin(u) * std::sin(t),
+                   z + r * std::cos(u)));
+        }
+      }
+    }
+    // Pixel x covers [x, x + 1): the drawn box spans the predicted one to within 2 px.
+    EXPECT_NEAR(x0, px0, 2);
+    EXPECT_NEAR(y0, py0, 2);
+    EXPECT_NEAR(x1 + 1, px1, 2);
+    EXPECT_NEAR(y1 + 1, py1, 2);
+    // The middle of the axis and the points a quarter of the length from it are covered.
+    for (const double z : {-0.25 * l, 0.0, 0.25 * l}) {
+      render::Vec2 px;
+      ASSERT_TRUE(cam.project(pose.act(Vec3(0, 0, z)), px));
+      const int x = int(px.x()), y = int(px.y());
+      EXPECT_NE(ren.framebuffer().pixel(x, y), ren.background(x, y)) << "z " << z;
+    }
+  }
 }
 
 // follow_frame: the camera keeps its offset from a moving frame, and a user's change of view

@@ -63,15 +63,18 @@ namespace render {
 
 /// A marker in world coordinates (the simple form of visualization_msgs/Marker).
 struct Marker {
-  enum class Type { Point, Sphere, Arrow, Line, Box };
+  enum class Type { Point, Sphere, Arrow, Line, Box, Cylinder };
   Type type = Type::Point;
-  Vec3 a = Vec3::Zero();  ///< position (point, sphere, box centre) or start (arrow, line)
+  /// position (point, sphere, box and cylinder centre) or start (arrow, line)
+  Vec3 a = Vec3::Zero();
   Vec3 b = Vec3::Zero();  ///< end (arrow, line)
   /// Point: diameter in pixels; sphere: diameter (m); arrow: shaft diameter (m); line: width in
-  /// pixels; box: full extents along its axes R (m, all three entries of size3).
+  /// pixels; box: full extents along its axes R (m, all three entries of size3); cylinder:
+  /// size3 = (diameter along x, diameter along y, length along z) in its axes R, as RViz's
+  /// CYLINDER (a capsule is a cylinder and two spheres, as the simulator publishes it).
   double size = 0.02;
   Vec3 size3 = Vec3::Constant(0.1);
-  Mat3 R = Mat3::Identity();  ///< box: orientation in the world (columns: its axes)
+  Mat3 R = Mat3::Identity();  ///< box, cylinder: orientation in the world (columns: its axes)
   Eigen::Vector3d color = Eigen::Vector3d(1.0, 0.3, 0.1);  ///< rgb in [0, 1]
 };
 

@@ -276,6 +276,10 @@ void Renderer::draw_marker(const Marker& m) {
       if (m.size3.allFinite() && is_rotation(m.R))
         draw_box(SE3(m.R, m.a), m.size3.cwiseAbs(), m.color);
       break;
+    case Marker::Type::Cylinder:  // the geometry layer's cylinder mesh (unit, scaled)
+      if (m.size3.allFinite() && is_rotation(m.R))
+        draw_cylinder(SE3(m.R, m.a), m.size3.cwiseAbs(), m.color);
+      break;
     case Marker::Type::Line:
       draw_segment(Vec4(m.a.x(), m.a.y(), m.a.z(), 1), Vec4(m.b.x(), m.b.y(), m.b.z(), 1), c,
                    float(std::clamp(m.size, 0.5, 20.0)), true);

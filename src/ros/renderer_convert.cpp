@@ -79,7 +79,8 @@ void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
       out.push_back(r);
       break;
     case VM::CUBE:
-      r.type = render::Marker::Type::Box;
+    case VM::CYLINDER:
+      r.type = m.type == VM::CUBE ? render::Marker::Type::Box : render::Marker::Type::Cylinder;
       r.a = pose.p;
       r.R = pose.R;
       r.size3 = Vec3(m.scale.x, m.scale.y, m.scale.z);

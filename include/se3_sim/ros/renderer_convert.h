@@ -28,8 +28,8 @@ SE3 to_se3(const geometry_msgs::Pose& p);
 geometry_msgs::Pose to_pose(const SE3& f);
 
 /// Appends the render markers of one visualization_msgs/Marker whose frame is at `frame` in
-/// the renderer's fixed frame: SPHERE, CUBE, ARROW, POINTS, SPHERE_LIST, LINE_STRIP,
-/// LINE_LIST (others are ignored). Non-finite input adds nothing.
+/// the renderer's fixed frame: SPHERE, CUBE, CYLINDER, ARROW, POINTS, SPHERE_LIST, LINE_STRIP,
+/// LINE_LIST (others, MESH_RESOURCE among them, are ignored). Non-finite input adds nothing.
 void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
                     std::vector<render::Marker>& out);
 
