@@ -177,6 +177,22 @@ STUDY_TITLES = {
 }
 
 
+def speed_curves(ax, rows, names, key):
+    """One curve per engine of the study's rows: `key` against speed, each point's step beside it."""
+    for name in names:
+        pts = [r for r in rows if r["engine"] == name and r["ok"] == "1"
+               and math.isfinite(num(r[key]))]
+        if not pts:
+            continue
+        color, marker = STYLE.get(name, ("black", "."))
+        ax.loglog([num(p["rtf"]) for p in pts], [max(num(p[key]), 1e-17) for p in pts],
+                  color=color, marker=marker, ls=line_style(name), label=label_of(name),
+                  lw=1.3, ms=5)
+        for p in pts:
+            ax.annotate("%g" % num(p["dt"]), (num(p["rtf"]), max(num(p[key]), 1e-17)),
+                        fontsize=5, alpha=0.6, xytext=(2, 2), textcoords="offset points")
+
+
 def study(data_dir, out_dir):
     """The Erez-Tassa-Todorov measures: one chart per measure, speed on the x axis."""
     rows = read(os.path.join(data_dir, "study.csv"))
@@ -205,19 +221,7 @@ def study(data_dir, out_dir):
             for r in rows:
                 if r["model"] == model and r["engine"] not in names:
                     names.append(r["engine"])
-            for name in names:
-                pts = [r for r in rows if r["model"] == model and r["engine"] == name
-                       and r["ok"] == "1" and math.isfinite(num(r[key]))]
-                if not pts:
-                    continue
-                color, marker = STYLE.get(name, ("black", "."))
-                ax.loglog([num(p["rtf"]) for p in pts], [max(num(p[key]), 1e-17) for p in pts],
-                          color=color, marker=marker, ls=line_style(name), label=label_of(name),
-                          lw=1.3, ms=5)
-                # the step of each point, small, next to its marker
-                for p in pts:
-                    ax.annotate("%g" % num(p["dt"]), (num(p["rtf"]), max(num(p[key]), 1e-17)),
-                                fontsize=5, alpha=0.6, xytext=(2, 2), textcoords="offset points")
+            speed_curves(ax, [r for r in rows if r["model"] == model], names, key)
             ax.set_title(STUDY_TITLES.get(model, model), fontsize=10)
             ax.set_xlabel("speed: simulated seconds per CPU second (steps of 1e-4 .. 1e-2 s)")
             ax.set_ylabel(ylabel)
@@ -242,18 +246,7 @@ def study_contact(data_dir, out_dir):
               ("penetration", "deepest penetration over the run (m)")]
     fig, axes = plt.subplots(1, 2, figsize=(15, 5.6), squeeze=False)
     for ax, (key, ylabel) in zip(axes[0], panels):
-        for name in names:
-            pts = [r for r in rows if r["engine"] == name and r["ok"] == "1"
-                   and math.isfinite(num(r[key]))]
-            if not pts:
-                continue
-            color, marker = STYLE.get(name, ("black", "."))
-            ax.loglog([num(p["rtf"]) for p in pts], [max(num(p[key]), 1e-17) for p in pts],
-                      color=color, marker=marker, ls=line_style(name), label=label_of(name),
-                      lw=1.3, ms=5)
-            for p in pts:
-                ax.annotate("%g" % num(p["dt"]), (num(p["rtf"]), max(num(p[key]), 1e-17)),
-                            fontsize=5, alpha=0.6, xytext=(2, 2), textcoords="offset points")
+        speed_curves(ax, rows, names, key)
         ax.set_xlabel("speed: simulated seconds per CPU second (steps of 2.5e-4 .. 4e-3 s)")
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
