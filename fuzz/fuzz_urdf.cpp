@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "model/urdf_guard.h"
-#include "model/utf8.h"
 #include "se3_sim/dynamics.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/model.h"

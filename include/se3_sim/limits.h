@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 namespace se3 {
 namespace limits {
@@ -49,4 +50,10 @@ constexpr double kMaxBodySteps = 1e10;
 constexpr std::size_t kMaxCsvBytes = 256u << 20;
 
 }  // namespace limits
+
+/// Offset of the first byte of s that is not valid UTF-8 (overlong forms, surrogates and code
+/// points past U+10FFFF included), or s.size() when all of it is: the one check that the URDF
+/// guards and the scene reader run over outside text before a parser sees it (src/model/utf8.cpp).
+std::size_t first_invalid_utf8(const std::string& s);
+
 }  // namespace se3

@@ -14,7 +14,6 @@
 
 #include "se3_sim/limits.h"
 #include "se3_sim/model.h"
-#include "utf8.h"
 
 namespace se3 {
 namespace {

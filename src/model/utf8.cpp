@@ -1,5 +1,5 @@
-// first_invalid_utf8 (utf8.h): the one UTF-8 check of outside text (URDF and scene files).
-#include "utf8.h"
+// first_invalid_utf8 (limits.h): the one UTF-8 check of outside text (URDF and scene files).
+#include "se3_sim/limits.h"
 
 namespace se3 {
 

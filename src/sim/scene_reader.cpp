@@ -11,7 +11,6 @@
 #include <sstream>
 #include <unordered_set>
 
-#include "model/utf8.h"
 #include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 
