@@ -385,6 +385,18 @@ TEST(SceneDepth, DeepNestingIsRefusedBeforeYamlCppParses) {
   for (int i = 0; i < 200; ++i) block += std::string(i, ' ') + "k" + std::to_string(i) + ":\n";
   EXPECT_NE(error_of<SceneError>([&] { parse_scene(block, kScenes, "b.yaml"); }).find("nested"),
             std::string::npos);
+  // yaml-cpp nests a line that starts with an empty key ": " under an empty value on the line
+  // before (blank lines between included): one level per line (found by fuzz_scene).
+  std::string empty_keys = "robot: chain:2\nx:\n";
+  for (int i = 0; i < 100; ++i) empty_keys += i % 3 == 1 ? ":\r\r\n  \n" : ": \n";
+  EXPECT_NE(error_of<SceneError>([&] {
+              parse_scene(empty_keys, kScenes, "e.yaml");
+            }).find("nested more than 64"),
+            std::string::npos);
+  std::string siblings = "robot: chain:2\nx:\n";  // with values they are siblings: no nesting
+  for (int i = 0; i < 100; ++i) siblings += "  : " + std::to_string(i) + "\n";
+  EXPECT_EQ(error_of<SceneError>([&] { parse_scene(siblings, kScenes, "s.yaml"); }).find("nested"),
+            std::string::npos);
   // Nesting inside quotes, comments and block scalars is text.
   const std::string text =
       "robot: chain:2\nname: '[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[['\n"

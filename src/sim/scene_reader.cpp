@@ -75,6 +75,10 @@ std::string where(const SceneReader::Field& f) {
 //    `a: b` inside a flow list makes).
 //  - Quoted scalars (possibly over several lines), comments and block scalars (`|`, `>`)
 //    are skipped as yaml-cpp skips them; a quote counts only where a node starts.
+//  - yaml-cpp reads a line that starts with `: ` (an empty key), after a line that ended with an
+//    empty value (`key:` or `?`), as that value: a map one level deeper. So ": \n: \n: \n"
+//    nests once per line (found by fuzz_scene's cross-check); such a line takes the depth of the
+//    empty value before it, blank and comment lines between them included.
 // Items: every separator (`,` `[` `{` `:` `-` `?`) and every line; yaml-cpp makes at most about
 // two nodes per item.
 class TextLimits {
@@ -163,11 +167,15 @@ class TextLimits {
     }
     if (blank && quote_ == 0) return;
     item();
+    const int empty_value = empty_value_depth_;
+    empty_value_depth_ = -1;
     int depth;  // collections around the node that starts here
     if (quote_ == 0 && flow_ == 0) {
       while (!starts_.empty() && starts_.back().col > indent) starts_.pop_back();
       depth = (starts_.empty() ? 0 : starts_.back().depth) + 1;
       if (starts_.empty() || starts_.back().col < indent) starts_.push_back({indent, depth});
+      const bool empty_key = s_[p] == ':' && (p + 1 == e || s_[p + 1] == ' ' || s_[p + 1] == '\t');
+      if (empty_key && empty_value > depth) depth = empty_value;
     } else {
       depth = flow_ > 0 ? flow_base_ + 2 * flow_ : (starts_.empty() ? 1 : starts_.back().depth);
     }
@@ -195,6 +203,7 @@ class TextLimits {
       const bool before_blank = k + 1 >= e || s_[k + 1] == ' ' || s_[k + 1] == '\t';
       const int col = static_cast<int>(k - b);
       if (c == '#' && after_blank) break;
+      empty_value_depth_ = -1;  // the line has something after its last indicator
       switch (c) {
         case '[':
         case '{':
@@ -234,6 +243,7 @@ class TextLimits {
             size_t next = k + 1;
             while (next < e && (s_[next] == ' ' || s_[next] == '\t')) ++next;
             if (next < e && s_[next] != '#') push(static_cast<int>(next - b), depth);
+            if (c != '-') empty_value_depth_ = depth;  // kept only if nothing follows
             node_start = true;
           } else if (node_start) {
             owner = col;
@@ -270,6 +280,7 @@ class TextLimits {
   char quote_ = 0;
   int flow_ = 0, flow_base_ = 0;
   int block_scalar_ = -1;
+  int empty_value_depth_ = -1;  // the depth of a block `:` or `?` that ended the last line
   std::vector<Start> starts_;
 };
 
