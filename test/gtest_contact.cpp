@@ -320,3 +320,47 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// panda_push.yaml: joint 1 swings the arm round at 1.2 rad/s and the finger hulls sweep into the
+// 1 kg box on the table. The arm is held smoothly (no joint's velocity flips from step to step, as
+// the wrist's did when d = 40 passed its explicit bound 2 M_ii / dt; the arm then sagged onto the
+// table under p = 400 and stopped there, and the box moved 3.5 cm). The box is pushed along an
+// arc (about 0.2 m), stays on the table top upright (z at its half height), and comes to rest
+// (mu 0.4): no tunnelling, no flight.
+TEST(Contact, PandaPushesTheBoxAlongTheTableAndItComesToRest) {
+  const Scene sc = load_scene(kScenes + "panda_push.yaml");
+  auto sim = make_simulator(sc);
+  ASSERT_EQ(sim->objects()[1].name, "box");
+  const Vec3 start = sim->objects()[1].pose.p;
+  double fastest = 0, deepest = 0, flip = 0;
+  VecX v1 = sim->state().v, v2 = v1;
+  for (int k = 0; k < 5; ++k) {
+    for (int s = 0; s < 1000; ++s) {
+      ASSERT_TRUE(sim->step()) << sim->failure();
+      if (k == 0 && s >= 2 && s < 100) {  // before the fingers reach the box
+        flip = std::max(flip, (sim->state().v - 2 * v1 + v2).cwiseAbs().maxCoeff());
+      }
+      v2 = v1;
+      v1 = sim->state().v;
+      fastest = std::max(fastest, sim->objects()[1].twist.tail<3>().norm());
+      deepest = std::max(deepest, sim->penetration_max());
+    }
+    const Vec3 p = sim->objects()[1].pose.p;
+    std::printf("panda_push t = %d s: box at (%.4f, %.4f, %.4f), |v| %.3g, joint 1 %.3f rad\n",
+                k + 1, p.x(), p.y(), p.z(), sim->objects()[1].twist.tail<3>().norm(),
+                sim->state().q(0));
+  }
+  const ObjectState& box = sim->objects()[1];
+  const Vec3 moved = box.pose.p - start;
+  std::printf("panda_push: largest step-to-step velocity flip %.3g rad/s, box moved %.4f m\n", flip,
+              moved.head<2>().norm());
+  EXPECT_LT(flip, 0.05);                                      // rad/s (it was 4 at d = 40)
+  EXPECT_GT(moved.head<2>().norm(), 0.1);                     // pushed
+  EXPECT_NEAR(box.pose.p.z(), 0.05 + 0.04, 2e-3);             // on the table top, on a face
+  EXPECT_GT(box.pose.R.row(2).cwiseAbs().maxCoeff(), 0.999);  // one face axis vertical
+  EXPECT_LT(std::abs(box.pose.p.x() - 0.6), 0.3);             // within the table's extent
+  EXPECT_LT(std::abs(box.pose.p.y()), 0.6);
+  EXPECT_LT(fastest, 2.0);  // never thrown faster than the fingers sweep
+  EXPECT_LT(deepest, 3e-3);
+  EXPECT_LT(box.twist.norm(), 1e-2);  // at rest after the push
+}
