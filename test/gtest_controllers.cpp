@@ -14,6 +14,7 @@
 #include <string>
 
 #include "se3_sim/controllers.h"
+#include "se3_sim/gain_check.h"
 #include "se3_sim/sim.h"
 #include "test_util.h"
 
@@ -544,4 +545,96 @@ TEST(SceneControllers, QuadrupedStandsUnderPositionControllers) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// gain_check.h: a velocity controller's p (pure damping, target 0) on one free joint flips the
+// joint's velocity every step past dt p / M = 2 and not below it, as the bound says; the check
+// warns past it only. On panda_push the Gazebo-style d = 40 on every joint is past the bound on
+// the wrist (and nowhere else), the scene's own gains are within it, as are every shipped
+// scene's.
+TEST(GainCheck, TheBoundIsWhereAVelocityControllerStartsToFlip) {
+  for (const double factor : {1.8, 2.2}) {
+    SCOPED_TRACE(factor);
+    const std::string base =
+        "robot: chain:1\nbase: fixed\ngravity: [0, 0, 0]\ndt: 0.001\n"
+        "initial_velocities: {j1: 1.0}\n";
+    auto probe = make_simulator(parse_scene(base, kScenes, "g.yaml"));
+    Data data(probe->model());
+    const double m = minv(probe->model(), data, probe->state().base, probe->state().q)(0, 0);
+    const double p = factor / (0.001 * m);
+    const Scene sc = parse_scene(base +
+                                     "controllers: {c: {type: "
+                                     "effort_controllers/JointVelocityController, joint: j1, "
+                                     "pid: {p: " +
+                                     std::to_string(p) + "}}}\n",
+                                 kScenes, "g.yaml");
+    auto sim = make_simulator(sc);
+    const auto warnings =
+        gain_stability_warnings(sim->model(), sim->state(), sc.controllers, 0.001);
+    ASSERT_EQ(warnings.size(), factor > 2 ? 1u : 0u);
+    if (factor > 2) {
+      EXPECT_NE(warnings[0].find("controller 'c': joint 'j1' p = "), std::string::npos)
+          << warnings[0];
+    }
+    double v_last = sim->state().v(0);
+    int flips = 0;
+    for (int k = 0; k < 20; ++k) {
+      ASSERT_TRUE(sim->step()) << sim->failure();
+      flips += sim->state().v(0) * v_last < 0;
+      v_last = sim->state().v(0);
+    }
+    EXPECT_EQ(flips, 20);  // 1 - dt p / M is negative either way
+    if (factor > 2) {
+      EXPECT_GT(std::abs(v_last), 10.0);  // 1.2^20 = 38
+    } else {
+      EXPECT_LT(std::abs(v_last), 0.05);  // 0.8^20 = 0.012
+    }
+  }
+}
+
+TEST(GainCheck, NoShippedSceneIsPastTheBound) {
+  int with_controllers = 0;
+  for (const char* name : {"fixed_arm", "fixed_panda", "panda_push", "quadruped_ground",
+                           "solo12_meshes", "satellite_arm", "ur5_self_collision"}) {
+    SCOPED_TRACE(name);
+    const Scene sc = load_scene(kScenes + name + ".yaml");
+    auto sim = make_simulator(sc);
+    with_controllers += !sc.controllers.empty();
+    for (const std::string& w :
+         gain_stability_warnings(sim->model(), sim->state(), sc.controllers, sim->dt())) {
+      ADD_FAILURE() << w;
+    }
+  }
+  EXPECT_GE(with_controllers, 3);
+  // The shipped ros_control YAML for the Panda, on fixed_panda.
+  std::ifstream in(kSource + "/config/controllers/panda.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::vector<ControllerSpec> specs = parse_controllers_text(text.str());
+  ASSERT_GE(specs.size(), 3u);
+  auto sim = make_simulator(load_scene(kScenes + "fixed_panda.yaml"));
+  for (const ControllerSpec& s : specs) {
+    for (const std::string& w :
+         gain_stability_warnings(sim->model(), sim->state(), {s}, sim->dt())) {
+      ADD_FAILURE() << w;
+    }
+  }
+}
+
+TEST(GainCheck, PandaPushGazeboGainsArePastTheBoundOnTheWristOnly) {
+  Scene sc = load_scene(kScenes + "panda_push.yaml");
+  auto sim = make_simulator(sc);
+  EXPECT_TRUE(
+      gain_stability_warnings(sim->model(), sim->state(), sc.controllers, sim->dt()).empty());
+  ASSERT_EQ(sc.controllers.size(), 1u);
+  for (PidGains& g : sc.controllers[0].gains) g = PidGains{400, 0, 40};
+  const auto w = gain_stability_warnings(sim->model(), sim->state(), sc.controllers, sim->dt());
+  std::string all;
+  for (const std::string& line : w) all += line + "\n";
+  std::printf("%s", all.c_str());
+  EXPECT_NE(all.find("joint 'panda_joint7' gains p = 400, d = 40"), std::string::npos) << all;
+  EXPECT_NE(all.find("lower d below"), std::string::npos) << all;
+  for (const char* big : {"panda_joint2", "panda_joint3", "panda_joint4"}) {
+    EXPECT_EQ(all.find(big), std::string::npos) << big;
+  }
 }

@@ -30,6 +30,7 @@
 #include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
+#include "se3_sim/gain_check.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/sim.h"
@@ -395,6 +396,10 @@ void SimulatorNodeImpl::setup_controllers() {
   }
   for (const auto& p : from_params) specs.push_back(p);
   sim_->set_controllers(specs);
+  for (const std::string& w :
+       se3::gain_stability_warnings(sim_->model(), sim_->state(), specs, sim_->dt())) {
+    ROS_WARN("simulator: %s", w.c_str());
+  }
 }
 
 bool SimulatorNodeImpl::init() {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "se3_sim/gain_check.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
@@ -125,7 +126,13 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     sim.set_scene_collision(
         scene_collision(scene, &sim.model(), scene.robot_path.empty() ? &none : nullptr));
   }
-  if (!scene.controllers.empty()) sim.set_controllers(scene.controllers);
+  if (!scene.controllers.empty()) {
+    sim.set_controllers(scene.controllers);
+    for (const std::string& w :
+         gain_stability_warnings(sim.model(), x0, scene.controllers, scene.dt)) {
+      std::fprintf(stderr, "warning: %s\n", w.c_str());
+    }
+  }
 
   std::ofstream csv;
   if (!o.out_csv.empty()) {

@@ -1,0 +1,60 @@
+#include "se3_sim/gain_check.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace se3 {
+
+std::vector<std::string> gain_stability_warnings(const Model& model, const State& x,
+                                                 const std::vector<ControllerSpec>& specs,
+                                                 double dt) {
+  std::vector<std::string> out;
+  if (!(dt > 0) || !std::isfinite(dt)) return out;
+  bool any = false;
+  for (const ControllerSpec& s : specs) any = any || (uses_pid(s.kind) && !s.gains.empty());
+  if (!any) return out;
+  Data data(model);
+  const MatX& Dinv = minv(model, data, x.base, x.q);
+  char line[512];
+  for (const ControllerSpec& s : specs) {
+    if (!uses_pid(s.kind) || s.gains.size() != s.joints.size()) continue;
+    const bool velocity = s.kind == ControllerKind::Velocity;
+    for (size_t k = 0; k < s.joints.size(); ++k) {
+      const int i = model.joint_index(s.joints[k]);
+      if (i < 1) continue;
+      const int iv = model.idx_v(i);
+      const double m = Dinv(iv, iv);  // 1 / effective inertia, the other joints held
+      if (!(m > 0) || !std::isfinite(m)) continue;
+      const PidGains& g = s.gains[k];
+      const double damping = velocity ? g.p : g.d;
+      const double stiffness = velocity ? 0.0 : g.p;
+      const double factor = dt * damping * m + 0.5 * dt * dt * stiffness * m;
+      if (factor < 2) continue;
+      const double d_max = (2 - 0.5 * dt * dt * stiffness * m) / (dt * m);
+      if (velocity) {
+        std::snprintf(line, sizeof line,
+                      "controller '%s': joint '%s' p = %g is past what a step of %g s carries "
+                      "(effective inertia %.3g, dt p / M = %.2f, stable below 2): its velocity "
+                      "will flip every step; lower p below %.3g or dt",
+                      s.name.c_str(), s.joints[k].c_str(), g.p, dt, 1 / m, factor, d_max);
+      } else if (d_max > 0) {
+        std::snprintf(line, sizeof line,
+                      "controller '%s': joint '%s' gains p = %g, d = %g are past what a step of "
+                      "%g s carries (effective inertia %.3g, dt d / M + dt^2 p / 2M = %.2f, stable "
+                      "below 2): it will chatter from step to step; lower d below %.3g or dt",
+                      s.name.c_str(), s.joints[k].c_str(), g.p, g.d, dt, 1 / m, factor, d_max);
+      } else {
+        std::snprintf(line, sizeof line,
+                      "controller '%s': joint '%s' gains p = %g, d = %g are past what a step of "
+                      "%g s carries (effective inertia %.3g, dt d / M + dt^2 p / 2M = %.2f, stable "
+                      "below 2): it will chatter from step to step; lower p below %.3g or dt",
+                      s.name.c_str(), s.joints[k].c_str(), g.p, g.d, dt, 1 / m, factor,
+                      4 / (dt * dt * m));
+      }
+      out.emplace_back(line);
+    }
+  }
+  return out;
+}
+
+}  // namespace se3
