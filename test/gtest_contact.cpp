@@ -323,7 +323,7 @@ int main(int argc, char** argv) {
 
 // panda_push.yaml: joint 1 swings the arm round at 1.2 rad/s and the finger hulls sweep into the
 // 1 kg box on the table. The arm is held smoothly (no joint's velocity flips from step to step, as
-// the wrist's did when d = 40 passed its explicit bound 2 M_ii / dt; the arm then sagged onto the
+// the wrist's did when d = 40 passed the step's bound of gain_check.h; the arm then sagged onto the
 // table under p = 400 and stopped there, and the box moved 3.5 cm). The box is pushed along an
 // arc (about 0.2 m), stays on the table top upright (z at its half height), and comes to rest
 // (mu 0.4): no tunnelling, no flight.
