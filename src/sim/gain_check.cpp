@@ -23,34 +23,31 @@ std::vector<std::string> gain_stability_warnings(const Model& model, const State
       const int i = model.joint_index(s.joints[k]);
       if (i < 1) continue;
       const int iv = model.idx_v(i);
-      const double m = Dinv(iv, iv);  // 1 / effective inertia, the other joints held
+      const double m = Dinv(iv, iv);  // 1 / effective inertia, the other joints free
       if (!(m > 0) || !std::isfinite(m)) continue;
       const PidGains& g = s.gains[k];
       const double damping = velocity ? g.p : g.d;
       const double stiffness = velocity ? 0.0 : g.p;
       const double factor = dt * damping * m + 0.5 * dt * dt * stiffness * m;
       if (factor < 2) continue;
+      // What to lower: the damping, to its bound at this stiffness, unless the stiffness alone
+      // is past it (then p, to its bound without damping).
       const double d_max = (2 - 0.5 * dt * dt * stiffness * m) / (dt * m);
+      const bool lower_p = velocity || d_max <= 0;
+      const double bound = velocity ? d_max : d_max > 0 ? d_max : 4 / (dt * dt * m);
+      char gains[96];
       if (velocity) {
-        std::snprintf(line, sizeof line,
-                      "controller '%s': joint '%s' p = %g is past what a step of %g s carries "
-                      "(effective inertia %.3g, dt p / M = %.2f, stable below 2): its velocity "
-                      "will flip every step; lower p below %.3g or dt",
-                      s.name.c_str(), s.joints[k].c_str(), g.p, dt, 1 / m, factor, d_max);
-      } else if (d_max > 0) {
-        std::snprintf(line, sizeof line,
-                      "controller '%s': joint '%s' gains p = %g, d = %g are past what a step of "
-                      "%g s carries (effective inertia %.3g, dt d / M + dt^2 p / 2M = %.2f, stable "
-                      "below 2): it will chatter from step to step; lower d below %.3g or dt",
-                      s.name.c_str(), s.joints[k].c_str(), g.p, g.d, dt, 1 / m, factor, d_max);
+        std::snprintf(gains, sizeof gains, "p = %g", g.p);
       } else {
-        std::snprintf(line, sizeof line,
-                      "controller '%s': joint '%s' gains p = %g, d = %g are past what a step of "
-                      "%g s carries (effective inertia %.3g, dt d / M + dt^2 p / 2M = %.2f, stable "
-                      "below 2): it will chatter from step to step; lower p below %.3g or dt",
-                      s.name.c_str(), s.joints[k].c_str(), g.p, g.d, dt, 1 / m, factor,
-                      4 / (dt * dt * m));
+        std::snprintf(gains, sizeof gains, "gains p = %g, d = %g", g.p, g.d);
       }
+      std::snprintf(line, sizeof line,
+                    "controller '%s': joint '%s' %s %s past what a step of %g s carries "
+                    "(effective inertia %.3g, %s = %.2f, stable below 2): its velocity will flip "
+                    "from step to step; lower %s below %.3g or dt",
+                    s.name.c_str(), s.joints[k].c_str(), gains, velocity ? "is" : "are", dt, 1 / m,
+                    velocity ? "dt p / M" : "dt d / M + dt^2 p / 2M", factor, lower_p ? "p" : "d",
+                    bound);
       out.emplace_back(line);
     }
   }
