@@ -2,7 +2,9 @@
 // RViz MarkerArray (MESH_RESOURCE with the URDF's package:// names), sim markers, the camera
 // command, following a frame, save_frame's paths, mesh resolution through rospack.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -222,6 +224,135 @@ TEST(RosRenderer, SceneCylindersAndCapsulesAreDrawnWhereTheyProject) {
       EXPECT_NE(ren.framebuffer().pixel(x, y), ren.background(x, y)) << "z " << z;
     }
   }
+}
+
+// A scene's mesh object as the simulator publishes it (MESH_RESOURCE, file:// of the resolved
+// path, the scene's scale) is drawn by the renderer node with its own triangles (MarkerMeshes,
+// append_markers): an STL box of 0.2 x 0.15 x 0.1 m scaled by (1, 2, 3) covers the same pixels as
+// a box marker of 0.2 x 0.3 x 0.3 m at the same pose (intersection over union >= 0.98, in the
+// object's colour); without the mesh cache the marker draws nothing, and a resource that cannot
+// be read warns once, naming it, and is drawn as the stand-in cube.
+TEST(RosRenderer, SceneMeshObjectsAreDrawnWithTheirTriangles) {
+  const fs::path dir = fs::temp_directory_path() / ("se3_marker_mesh_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string stl = (dir / "box.stl").string();
+  {
+    // Twelve triangles of an axis-aligned box centred at the origin, outward normals.
+    const double h[3] = {0.1, 0.075, 0.05};
+    std::ofstream f(stl);
+    f << "solid box\n";
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = -1; side <= 1; side += 2) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        auto corner = [&](int a, int b) {
+          double c[3];
+          c[axis] = side * h[axis];
+          c[u] = a * h[u];
+          c[v] = b * h[v];
+          return Vec3(c[0], c[1], c[2]);
+        };
+        Vec3 quad[4] = {corner(-1, -1), corner(1, -1), corner(1, 1), corner(-1, 1)};
+        if (side < 0) std::swap(quad[1], quad[3]);
+        for (const auto& tri : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+          f << "facet normal 0 0 0\nouter loop\n";
+          for (int k : tri) f << "vertex " << quad[k].transpose() << "\n";
+          f << "endloop\nendfacet\n";
+        }
+      }
+    }
+    f << "endsolid box\n";
+  }
+  render::Camera cam;
+  cam.width = 320;
+  cam.height = 240;
+  cam.focal_px = 300;
+  cam.eye = Vec3(1.6, -1.2, 1.0);
+  cam.target = Vec3(0, 0, 0.3);
+  cam.update();
+  const SE3 pose(Eigen::AngleAxisd(0.5, Vec3(1, 2, 3).normalized()).toRotationMatrix(),
+                 Vec3(0.05, 0.0, 0.3));
+  const Vec3 scale(1, 2, 3);
+
+  SceneObject o;
+  o.name = "crate";
+  std::string err;
+  ASSERT_TRUE(load_mesh_shape(stl, scale, ResourceResolver(), o.shape, &err)) << err;
+  o.material.rgba = Vec4f(0.1f, 0.2f, 0.9f, 1.0f);
+  o.material.has_color = true;
+  ObjectState st;
+  st.name = o.name;
+  st.pose = pose;
+  visualization_msgs::MarkerArray arr;
+  se3_ros::append_object_markers({o}, {st}, "world", ros::Time(), arr);
+  ASSERT_EQ(arr.markers.size(), 1u);
+  const visualization_msgs::Marker& m = arr.markers[0];
+  ASSERT_EQ(m.type, visualization_msgs::Marker::MESH_RESOURCE);
+
+  auto drawn_pixels = [&](const std::vector<render::Marker>& markers, int* blue) {
+    render::Renderer ren(cam);
+    ren.style().grid = false;
+    ren.style().overlay = false;
+    ren.render({}, markers);
+    std::vector<bool> on(std::size_t(cam.width) * cam.height, false);
+    if (blue) *blue = 0;
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        if (ren.framebuffer().pixel(x, y) == ren.background(x, y)) continue;
+        on[std::size_t(y) * cam.width + x] = true;
+        const render::Rgb q = ren.framebuffer().rgb(x, y);
+        if (blue) *blue += int(q.b) > int(q.r) + 40 && int(q.b) > int(q.g) + 40;
+      }
+    }
+    return on;
+  };
+
+  std::vector<render::Marker> none;
+  rr::append_markers(m, SE3(), none);
+  EXPECT_TRUE(none.empty()) << "a MESH_RESOURCE marker without the mesh cache";
+
+  rr::MarkerMeshes meshes(rr::ros_resolver());
+  std::string warning;
+  EXPECT_FALSE(meshes.load(m, &warning)) << warning;
+  EXPECT_FALSE(meshes.load(m, &warning)) << "loaded once";
+  EXPECT_EQ(meshes.size(), 1u);
+  std::vector<render::Marker> mesh_markers;
+  rr::append_markers(m, SE3(), mesh_markers, &meshes);
+  ASSERT_EQ(mesh_markers.size(), 1u);
+  EXPECT_EQ(mesh_markers[0].type, render::Marker::Type::Mesh);
+
+  render::Marker box;
+  box.type = render::Marker::Type::Box;
+  box.a = pose.p;
+  box.R = pose.R;
+  box.size3 = Vec3(0.2, 0.3, 0.3);
+  box.color = Eigen::Vector3d(0.1, 0.2, 0.9);
+  int blue = 0;
+  const std::vector<bool> a = drawn_pixels(mesh_markers, &blue), b = drawn_pixels({box}, nullptr);
+  int both = 0, either = 0, count = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    both += a[i] && b[i];
+    either += a[i] || b[i];
+    count += a[i];
+  }
+  ASSERT_GT(count, 2000);
+  EXPECT_GE(double(both) / either, 0.98) << both << " of " << either;
+  EXPECT_EQ(blue, count);
+
+  // A resource that cannot be read: one warning naming it, then the stand-in cube.
+  visualization_msgs::Marker missing = m;
+  missing.mesh_resource = "file://" + (dir / "no_such.stl").string();
+  missing.id = 7;
+  warning.clear();
+  EXPECT_TRUE(meshes.load(missing, &warning));
+  EXPECT_NE(warning.find("no_such.stl"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("stand-in"), std::string::npos) << warning;
+  EXPECT_FALSE(meshes.load(missing, &warning)) << "warned once";
+  std::vector<render::Marker> stand_in;
+  rr::append_markers(missing, SE3(), stand_in, &meshes);
+  ASSERT_EQ(stand_in.size(), 1u);
+  EXPECT_EQ(stand_in[0].type, render::Marker::Type::Box);
+  EXPECT_TRUE(stand_in[0].size3.isApprox(0.1 * scale));
+  fs::remove_all(dir);
 }
 
 // follow_frame: the camera keeps its offset from a moving frame, and a user's change of view

@@ -61,9 +61,11 @@
 namespace se3 {
 namespace render {
 
+struct RenderMesh;
+
 /// A marker in world coordinates (the simple form of visualization_msgs/Marker).
 struct Marker {
-  enum class Type { Point, Sphere, Arrow, Line, Box, Cylinder };
+  enum class Type { Point, Sphere, Arrow, Line, Box, Cylinder, Mesh };
   Type type = Type::Point;
   /// position (point, sphere, box and cylinder centre) or start (arrow, line)
   Vec3 a = Vec3::Zero();
@@ -74,8 +76,12 @@ struct Marker {
   /// CYLINDER (a capsule is a cylinder and two spheres, as the simulator publishes it).
   double size = 0.02;
   Vec3 size3 = Vec3::Constant(0.1);
-  Mat3 R = Mat3::Identity();  ///< box, cylinder: orientation in the world (columns: its axes)
+  Mat3 R = Mat3::Identity();  ///< box, cylinder, mesh: orientation in the world (its axes)
   Eigen::Vector3d color = Eigen::Vector3d(1.0, 0.3, 0.1);  ///< rgb in [0, 1]
+  /// Mesh: the triangles (scale already applied, make_render_mesh) drawn at (R, a); null draws
+  /// nothing. Copying a marker shares the mesh (no allocation).
+  std::shared_ptr<const RenderMesh> mesh;
+  bool mesh_colors = false;  ///< mesh: keep its runs' own colours instead of `color`
 };
 
 /// Text drawn at the top-left corner; NaN / empty fields are left out.
@@ -152,8 +158,9 @@ struct DrawItem {
 std::vector<DrawItem> make_draw_items(const Model& model, const GeometryModel& geometry,
                                       const DrawOptions& opt = DrawOptions());
 
-/// Chooses an eye and target that show the items at the body poses oMb and the box markers
-/// among boxes (and the ground) from a three-quarter view; keeps cam's size and focal length.
+/// Chooses an eye and target that show the items at the body poses oMb and the box and mesh
+/// markers among `boxes` (and the ground) from a three-quarter view; keeps
+/// cam's size and focal length.
 void frame_items(const std::vector<DrawItem>& items, const std::vector<SE3>& oMb, Camera& cam,
                  const std::vector<Marker>& boxes = {});
 

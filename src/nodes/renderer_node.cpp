@@ -13,7 +13,10 @@
 // ~camera_frame ("renderer_camera_optical", broadcast on TF so others can project into the
 // image).
 // Subscribes: robot_description (param, re-read until it parses), /tf, sim_markers,
-// renderer/camera_command (geometry_msgs/Twist), sim_stats, torque_command (overlay).
+// renderer/camera_command (geometry_msgs/Twist), sim_stats, torque_command (overlay). The
+// sim_markers' shapes are drawn, MESH_RESOURCE ones (scene mesh objects) with their triangles,
+// loaded once per resource through the same resolver (a mesh that fails: one warning and a
+// stand-in cube).
 // Service: renderer/save_frame (std_srvs/Trigger): renders and writes the frame as a new PNG in
 // ~save_dir (never over an earlier one); the message is the path written.
 #include <geometry_msgs/TransformStamped.h>
@@ -89,6 +92,7 @@ class RendererNode {
     pnh_.param<std::string>("save_dir", save_dir_, "/tmp");
     pnh_.param<std::string>("camera_frame", camera_frame_, "renderer_camera_optical");
     pnh_.param("simplify_error", draw_.simplify_error, draw_.simplify_error);
+    marker_meshes_ = rr::MarkerMeshes(rr::ros_resolver(), draw_);
     renderer_ = std::make_unique<rn::Renderer>(cam);
     camera_ = renderer_->camera();
     pnh_.param("show_frames", renderer_->style().frames, false);
@@ -220,8 +224,16 @@ class RendererNode {
         sim_markers_.erase(key);
         continue;
       }
-      // A box that is new (e.g. the scene's satellite bus) is solid geometry: frame it too.
-      if (m.type == visualization_msgs::Marker::CUBE && !sim_markers_.count(key)) framed_ = false;
+      // A box or mesh that is new (e.g. the scene's satellite bus, a mesh object) is solid
+      // geometry: frame it too.
+      if ((m.type == visualization_msgs::Marker::CUBE ||
+           m.type == visualization_msgs::Marker::MESH_RESOURCE) &&
+          !sim_markers_.count(key)) {
+        framed_ = false;
+      }
+      // A mesh object's triangles are loaded here, once per resource, not per frame.
+      std::string warning;
+      if (marker_meshes_.load(m, &warning)) ROS_WARN("renderer: %s", warning.c_str());
       sim_markers_[key] = m;
     }
   }
@@ -290,7 +302,7 @@ class RendererNode {
           continue;
         }
       }
-      rr::append_markers(m, frame, out);
+      rr::append_markers(m, frame, out, &marker_meshes_);
     }
     return out;
   }
@@ -365,6 +377,7 @@ class RendererNode {
   std::vector<SE3> poses_, offsets_inv_, item_offsets_inv_;
   ros::WallTime last_model_try_;
   std::map<std::pair<std::string, int>, visualization_msgs::Marker> sim_markers_;
+  rr::MarkerMeshes marker_meshes_;
   rn::Overlay overlay_;
   sensor_msgs::Image image_;
 };

@@ -240,11 +240,20 @@ void frame_items(const std::vector<DrawItem>& items, const std::vector<SE3>& oMb
   for (std::size_t i = 0; i < oMb.size(); ++i) {
     if (finite_pose(oMb[i])) add(oMb[i].p);
   }
-  for (const Marker& m : boxes) {  // the corners of box markers (solid geometry, like a body)
-    if (m.type != Marker::Type::Box || !m.R.allFinite()) continue;
-    for (int c = 0; c < 8; ++c) {
-      const Vec3 s((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
-      add(m.a + m.R * s.cwiseProduct(m.size3));
+  // The corners of box and mesh markers (solid geometry, like a body).
+  for (const Marker& m : boxes) {
+    if (!m.R.allFinite() || !m.a.allFinite()) continue;
+    if (m.type == Marker::Type::Box && m.size3.allFinite()) {
+      for (int c = 0; c < 8; ++c) {
+        const Vec3 s((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
+        add(m.a + m.R * s.cwiseProduct(m.size3));
+      }
+    } else if (m.type == Marker::Type::Mesh && m.mesh && m.mesh->triangle_count()) {
+      const Eigen::Vector3d l = m.mesh->lower.cast<double>(), u = m.mesh->upper.cast<double>();
+      for (int c = 0; c < 8; ++c) {
+        add(m.a +
+            m.R * Vec3((c & 1) ? u.x() : l.x(), (c & 2) ? u.y() : l.y(), (c & 4) ? u.z() : l.z()));
+      }
     }
   }
   if (!cnt) add(Vec3::Zero());

@@ -280,6 +280,10 @@ void Renderer::draw_marker(const Marker& m) {
       if (m.size3.allFinite() && is_rotation(m.R))
         draw_cylinder(SE3(m.R, m.a), m.size3.cwiseAbs(), m.color);
       break;
+    case Marker::Type::Mesh:
+      if (m.mesh && is_rotation(m.R))
+        draw_mesh(*m.mesh, SE3(m.R, m.a), Vec3::Ones(), m.mesh_colors ? nullptr : &m.color);
+      break;
     case Marker::Type::Line:
       draw_segment(Vec4(m.a.x(), m.a.y(), m.a.z(), 1), Vec4(m.b.x(), m.b.y(), m.b.z(), 1), c,
                    float(std::clamp(m.size, 0.5, 20.0)), true);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 
 namespace se3 {
 namespace ros_renderer {
@@ -61,8 +62,57 @@ geometry_msgs::Pose to_pose(const SE3& f) {
   return p;
 }
 
+MarkerMeshes::MarkerMeshes(ResourceResolver resolver, const render::DrawOptions& opt)
+    : resolver_(std::move(resolver)), opt_(opt) {}
+
+std::string MarkerMeshes::key(const visualization_msgs::Marker& m) {
+  char scale[96];
+  std::snprintf(scale, sizeof scale, " %.17g %.17g %.17g", m.scale.x, m.scale.y, m.scale.z);
+  return m.mesh_resource + scale;
+}
+
+bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warning) {
+  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
+  const std::string k = key(m);
+  if (meshes_.count(k)) return false;
+  const Vec3 scale(m.scale.x, m.scale.y, m.scale.z);
+  std::string err;
+  Shape shape;
+  if (!scale.allFinite() || !(scale.cwiseAbs().minCoeff() > 0)) {
+    err = "scale is not finite and non-zero";
+  } else if (m.mesh_resource.empty()) {
+    err = "no mesh_resource";
+  } else if (load_mesh_shape(m.mesh_resource, scale, resolver_, shape, &err) && shape.mesh &&
+             shape.mesh->triangle_count() > 0) {
+    meshes_[k] = std::make_shared<render::RenderMesh>(
+        render::make_render_mesh(*shape.mesh, scale, Eigen::Vector3f::Constant(0.75f), opt_));
+    return false;
+  } else if (err.empty()) {
+    err = "the mesh has no triangles";
+  }
+  meshes_[k] = nullptr;
+  if (warning) {
+    *warning = "marker " + m.ns + "/" + std::to_string(m.id) + ": mesh '" + m.mesh_resource +
+               "' not drawn (" + err + "); a stand-in cube is drawn instead";
+  }
+  return true;
+}
+
+std::shared_ptr<const render::RenderMesh> MarkerMeshes::find(
+    const visualization_msgs::Marker& m) const {
+  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return nullptr;
+  const auto it = meshes_.find(key(m));
+  return it == meshes_.end() ? nullptr : it->second;
+}
+
+bool MarkerMeshes::failed(const visualization_msgs::Marker& m) const {
+  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
+  const auto it = meshes_.find(key(m));
+  return it != meshes_.end() && !it->second;
+}
+
 void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
-                    std::vector<render::Marker>& out) {
+                    std::vector<render::Marker>& out, const MarkerMeshes* meshes) {
   const SE3 pose = frame * to_se3(m.pose);
   if (!pose.R.allFinite() || !pose.p.allFinite()) return;
   const Eigen::Vector3d color(m.color.r, m.color.g, m.color.b);
@@ -117,6 +167,23 @@ void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
         r.b = pt(m.points[i + 1]);
         r.size = 2.0;
         out.push_back(r);
+      }
+      break;
+    }
+    case VM::MESH_RESOURCE: {
+      if (!meshes) break;
+      r.a = pose.p;
+      r.R = pose.R;
+      if (auto mesh = meshes->find(m)) {
+        r.type = render::Marker::Type::Mesh;
+        r.mesh = std::move(mesh);
+        r.mesh_colors = m.mesh_use_embedded_materials;
+        out.push_back(r);
+      } else if (meshes->failed(m)) {
+        r.type = render::Marker::Type::Box;
+        r.size3 = 0.1 * Vec3(m.scale.x, m.scale.y, m.scale.z).cwiseAbs();
+        r.color = Eigen::Vector3d::Constant(0.6);
+        if (r.size3.allFinite()) out.push_back(r);
       }
       break;
     }

@@ -11,6 +11,8 @@
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,11 +29,42 @@ SE3 to_se3(const geometry_msgs::Transform& t);
 SE3 to_se3(const geometry_msgs::Pose& p);
 geometry_msgs::Pose to_pose(const SE3& f);
 
+/// Mesh names resolved the ROS way: package:// through ros::package (rospack), file:// and
+/// paths by the library's resolver (relative ones against base_dir).
+ResourceResolver ros_resolver(const std::string& base_dir = "");
+
+/// The triangles of MESH_RESOURCE markers (the simulator's mesh objects), loaded once per
+/// resource and scale through the geometry layer (load_mesh_shape, its cache and limits) and
+/// made into RenderMeshes (make_render_mesh, simplified as DrawOptions say). A resource that
+/// cannot be resolved or read gives one warning and, from then on, a stand-in: a grey cube of
+/// 0.1 m times the marker's scale, so the object stays visible where it is.
+class MarkerMeshes {
+ public:
+  explicit MarkerMeshes(ResourceResolver resolver = ros_resolver(),
+                        const render::DrawOptions& opt = render::DrawOptions());
+  /// Loads m's mesh if it is a MESH_RESOURCE marker seen for the first time (allocates; call
+  /// it when the marker arrives, not per frame). Returns true and the warning in *warning the
+  /// first time a resource fails.
+  bool load(const visualization_msgs::Marker& m, std::string* warning = nullptr);
+  /// The loaded mesh of m, or null (not a mesh marker, not loaded yet, or failed).
+  std::shared_ptr<const render::RenderMesh> find(const visualization_msgs::Marker& m) const;
+  /// Whether m's resource failed to load (it is drawn as a stand-in).
+  bool failed(const visualization_msgs::Marker& m) const;
+  std::size_t size() const { return meshes_.size(); }
+
+ private:
+  static std::string key(const visualization_msgs::Marker& m);
+  ResourceResolver resolver_;
+  render::DrawOptions opt_;
+  std::map<std::string, std::shared_ptr<const render::RenderMesh>> meshes_;  ///< null: failed
+};
+
 /// Appends the render markers of one visualization_msgs/Marker whose frame is at `frame` in
 /// the renderer's fixed frame: SPHERE, CUBE, CYLINDER, ARROW, POINTS, SPHERE_LIST, LINE_STRIP,
-/// LINE_LIST (others, MESH_RESOURCE among them, are ignored). Non-finite input adds nothing.
+/// LINE_LIST, and MESH_RESOURCE when `meshes` holds its mesh (a failed one as its stand-in
+/// cube; others, and meshes not loaded, are ignored). Non-finite input adds nothing.
 void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
-                    std::vector<render::Marker>& out);
+                    std::vector<render::Marker>& out, const MarkerMeshes* meshes = nullptr);
 
 /// One camera_command step (the convention in render.h) applied to cam.
 void apply_camera_command(const geometry_msgs::Twist& cmd, render::Camera& cam);
@@ -68,10 +101,6 @@ class FollowCamera {
 /// two renderers never pick the same name): the counter advances past taken names. Returns ""
 /// with a reason in *error when dir is not writable.
 std::string reserve_frame_path(const std::string& dir, int& counter, std::string* error);
-
-/// Mesh names resolved the ROS way: package:// through ros::package (rospack), file:// and
-/// paths by the library's resolver (relative ones against base_dir).
-ResourceResolver ros_resolver(const std::string& base_dir = "");
 
 }  // namespace ros_renderer
 }  // namespace se3
