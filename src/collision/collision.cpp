@@ -55,6 +55,10 @@ struct CollisionModel::Impl {
   CollisionData* data = nullptr;
   double margin = 0;
   int max_contacts = 4;
+  // Meshes only: the hull's vertices as three arrays (all x, then all y, then all z) for the
+  // half-space test's one vectorised pass, and the centre and half extents of their box.
+  std::vector<std::vector<double>> hull_soa;
+  std::vector<std::array<Vec3, 2>> hull_box;
   // Half-space candidates: points and their signed distances (reserved once).
   std::vector<Vec3> points;
   std::vector<double> gaps;
@@ -123,27 +127,33 @@ void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, 
                  double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
                  std::vector<double>& dist) {
   picked.clear();
-  cand.clear();
-  int deepest = -1;
-  for (int i = 0; i < int(pts.size()); ++i) {
-    if (!(gaps[i] < margin)) continue;
-    cand.push_back(i);
-    if (deepest < 0 || gaps[i] < gaps[deepest]) deepest = i;
+  // The candidates without a branch per point (cand and dist hold at least pts.size()
+  // entries), then the deepest among them (the first of equal ones).
+  const int np = int(pts.size());
+  int nc = 0;
+  int* cs = cand.data();
+  for (int i = 0; i < np; ++i) {
+    cs[nc] = i;
+    nc += gaps[i] < margin;
   }
-  if (deepest < 0) return;
+  if (nc == 0) return;
+  int deepest = cs[0];
+  for (int k = 1; k < nc; ++k) {
+    if (gaps[cs[k]] < gaps[deepest]) deepest = cs[k];
+  }
   picked.push_back(deepest);
-  dist.assign(cand.size(), INFINITY);
+  std::fill(dist.begin(), dist.begin() + nc, INFINITY);
   int last = deepest;
   while (int(picked.size()) < max) {
     int best = -1;
     double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
-    for (std::size_t k = 0; k < cand.size(); ++k) {
-      Vec3 r = pts[cand[k]] - pts[last];
+    for (int k = 0; k < nc; ++k) {
+      Vec3 r = pts[cs[k]] - pts[last];
       r -= r.dot(n) * n;
       dist[k] = std::min(dist[k], r.squaredNorm());
       if (dist[k] > best_d) {
         best_d = dist[k];
-        best = cand[k];
+        best = cs[k];
       }
     }
     if (best < 0) break;
@@ -174,11 +184,20 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
   const double d0 = n.dot(T.p) - offset;
   const std::vector<Vec3>* pts = &m.points;
   if (o.shape.type == ShapeType::Mesh) {
+    // No vertex is nearer the plane than the nearest corner of the hull's box.
+    const std::array<Vec3, 2>& box = m.hull_box[b];
+    if (nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) return;
     pts = &m.hulls[b]->vertices;
+    const int nv = int(pts->size());
+    const double* X = m.hull_soa[b].data();
+    const double *Y = X + nv, *Z = Y + nv;
+    const double nx = nl.x(), ny = nl.y(), nz = nl.z();
+    double* g = m.gaps.data();
+    for (int i = 0; i < nv; ++i) g[i] = ((nx * X[i] + ny * Y[i]) + nz * Z[i]) + d0;
   } else {
     halfspace_candidates(o, SE3(), nl, m.points);
+    for (std::size_t i = 0; i < m.points.size(); ++i) m.gaps[i] = nl.dot(m.points[i]) + d0;
   }
-  for (std::size_t i = 0; i < pts->size(); ++i) m.gaps[i] = nl.dot((*pts)[i]) + d0;
   pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist);
   for (int i : m.picked) {
     Contact c;
@@ -362,6 +381,8 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
   m.n = n;
   m.fcl.resize(n);
   m.hulls.resize(n);
+  m.hull_soa.resize(n);
+  m.hull_box.resize(n);
   m.world.resize(n);
   if (!(options_.margin >= 0) || !std::isfinite(options_.margin)) {
     throw std::invalid_argument("collision options: the margin must be >= 0");
@@ -395,6 +416,17 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
             convex_hull(*o.shape.mesh, o.shape.scale, "collision object '" + o.name + "'"));
       }
       m.hulls[i] = h;
+      const std::vector<Vec3>& v = h->vertices;
+      const std::size_t nv = v.size();
+      std::vector<double>& soa = m.hull_soa[i];
+      soa.resize(3 * nv);
+      Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+      for (std::size_t k = 0; k < nv; ++k) {
+        for (int c = 0; c < 3; ++c) soa[c * nv + k] = v[k][c];
+        lo = lo.cwiseMin(v[k]);
+        hi = hi.cwiseMax(v[k]);
+      }
+      m.hull_box[i] = {Vec3((lo + hi) / 2), Vec3((hi - lo) / 2)};
     }
     m.fcl[i] = std::make_unique<Object>(fcl_shape(o, m.hulls[i]));
     m.fcl[i]->setUserData(reinterpret_cast<void*>(std::intptr_t(i)));
@@ -449,8 +481,8 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
   }
   m.points.reserve(most);
   m.gaps.assign(most, 0.0);  // sized once: at least as many as any object's candidates
-  m.cand.reserve(most);
-  m.dist.reserve(most);
+  m.cand.assign(most, 0);    // sized once: pick_points writes into them by index
+  m.dist.assign(most, 0.0);
 }
 
 CollisionModel::~CollisionModel() = default;
