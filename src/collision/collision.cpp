@@ -63,7 +63,7 @@ struct CollisionModel::Impl {
   std::vector<Vec3> points;
   std::vector<double> gaps;
   std::vector<int> picked, cand;
-  std::vector<double> dist;
+  std::vector<double> dist, tu, tv;
 
   bool ok(int i, int j) const { return allowed[std::size_t(i) * n + j] != 0; }
 };
@@ -122,10 +122,10 @@ void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
 // Up to max of the candidates below the margin: the deepest first, then each next the one
 // farthest (across the normal) from those already picked, so that a resting face keeps its
 // corners (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first;
-// cand and dist are workspaces.
+// cand, dist, tu and tv are workspaces of at least pts.size() entries.
 void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, const Vec3& n,
                  double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
-                 std::vector<double>& dist) {
+                 std::vector<double>& dist, std::vector<double>& tu, std::vector<double>& tv) {
   picked.clear();
   // The candidates without a branch per point (cand and dist hold at least pts.size()
   // entries), then the deepest among them (the first of equal ones).
@@ -142,23 +142,36 @@ void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, 
     if (gaps[cs[k]] < gaps[deepest]) deepest = cs[k];
   }
   picked.push_back(deepest);
-  std::fill(dist.begin(), dist.begin() + nc, INFINITY);
-  int last = deepest;
-  while (int(picked.size()) < max) {
-    int best = -1;
-    double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
+  if (max > 1 && nc > 1) {
+    // Distances across the normal from the candidates' coordinates in the plane (t1, t2).
+    int axis = 0;  // the world axis least along n
+    n.cwiseAbs().minCoeff(&axis);
+    const Vec3 t1 = n.cross(Vec3::Unit(axis)).normalized(), t2 = n.cross(t1);
+    double* cu = tu.data();
+    double* cv = tv.data();
     for (int k = 0; k < nc; ++k) {
-      Vec3 r = pts[cs[k]] - pts[last];
-      r -= r.dot(n) * n;
-      dist[k] = std::min(dist[k], r.squaredNorm());
-      if (dist[k] > best_d) {
-        best_d = dist[k];
-        best = cs[k];
-      }
+      cu[k] = t1.dot(pts[cs[k]]);
+      cv[k] = t2.dot(pts[cs[k]]);
     }
-    if (best < 0) break;
-    picked.push_back(best);
-    last = best;
+    double* d = dist.data();
+    std::fill(d, d + nc, INFINITY);
+    double lu = t1.dot(pts[deepest]), lv = t2.dot(pts[deepest]);
+    while (int(picked.size()) < max) {
+      int best = -1;
+      double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
+      for (int k = 0; k < nc; ++k) {
+        const double du = cu[k] - lu, dv = cv[k] - lv;
+        d[k] = std::min(d[k], du * du + dv * dv);
+        if (d[k] > best_d) {
+          best_d = d[k];
+          best = k;
+        }
+      }
+      if (best < 0) break;
+      picked.push_back(cs[best]);
+      lu = cu[best];
+      lv = cv[best];
+    }
   }
   std::sort(picked.begin(), picked.end(), [&](int x, int y) { return gaps[x] < gaps[y]; });
 }
@@ -198,7 +211,7 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
     halfspace_candidates(o, SE3(), nl, m.points);
     for (std::size_t i = 0; i < m.points.size(); ++i) m.gaps[i] = nl.dot(m.points[i]) + d0;
   }
-  pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist);
+  pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist, m.tu, m.tv);
   for (int i : m.picked) {
     Contact c;
     c.a = h;
@@ -483,6 +496,8 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
   m.gaps.assign(most, 0.0);  // sized once: at least as many as any object's candidates
   m.cand.assign(most, 0);    // sized once: pick_points writes into them by index
   m.dist.assign(most, 0.0);
+  m.tu.assign(most, 0.0);
+  m.tv.assign(most, 0.0);
 }
 
 CollisionModel::~CollisionModel() = default;
