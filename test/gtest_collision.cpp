@@ -212,6 +212,32 @@ TEST(Collision, MeshHullOnTheGroundToAMicrometre) {
   EXPECT_TRUE(d.contacts.empty());
 }
 
+// A mesh cylinder (the hull of 48 rim vertices a cap) standing on the ground, 1 mm deep: the
+// contacts are spread over its bottom rim by farthest-point sampling, the deepest first, then
+// the one opposite it, then the two between: every pair at least r sqrt(2) apart across the
+// normal (a sampler that took neighbouring rim vertices would give 2 r sin(pi / 48)).
+TEST(Collision, MeshHullOnItsFaceGivesSpreadContacts) {
+  const double r = 0.05, l = 0.1;
+  Shape cyl;
+  cyl.type = ShapeType::Mesh;
+  cyl.mesh = std::make_shared<TriangleMesh>(tessellate(make_cylinder(r, l), 48));
+  CollisionOptions opt = no_margin();
+  opt.max_contacts_per_pair = 4;
+  CollisionModel m({ground(), object("can", cyl, 0)}, opt);
+  CollisionData d;
+  // Tilted by 1e-4 rad so that one rim vertex is the deepest.
+  collide(m, d, {at(0.3, -0.2, 0.5 * l - 0.001, rot(Vec3(1, 0.3, 0), 1e-4))});
+  ASSERT_EQ(d.contacts.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(d.contacts[i].depth, 0.001, 1e-5);
+    if (i) EXPECT_GE(d.contacts[i - 1].depth + 1e-15, d.contacts[i].depth) << "deepest first";
+    for (std::size_t j = 0; j < i; ++j) {
+      const Vec3 dp = d.contacts[i].point - d.contacts[j].point;
+      EXPECT_GE(std::hypot(dp.x(), dp.y()), 0.99 * std::sqrt(2.0) * r) << i << " " << j;
+    }
+  }
+}
+
 TEST(Collision, HullAgainstASphereMatchesTheMesh) {
   // A box mesh's hull against a sphere: the same contact as the box primitive.
   Shape boxmesh;
