@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -236,6 +237,48 @@ TEST(Collision, MeshHullOnItsFaceGivesSpreadContacts) {
       EXPECT_GE(std::hypot(dp.x(), dp.y()), 0.99 * std::sqrt(2.0) * r) << i << " " << j;
     }
   }
+}
+
+// The narrow phase is skipped for pairs whose bounding boxes are farther apart than the margin
+// (boxes_apart in collision.cpp): it must never skip a pair that is nearer. A box's hull (a
+// mesh) turned at random against a capsule turned at random, placed near each other's faces,
+// edges and corners: a margin contact is reported exactly when the true gap (the capsule's
+// segment against the box, sampled finely, minus its radius) is below the margin.
+TEST(Collision, BoxPrefilterNeverDropsAPairWithinTheMargin) {
+  const Vec3 half(0.1, 0.06, 0.03);
+  Shape box;
+  box.type = ShapeType::Mesh;
+  box.mesh = std::make_shared<TriangleMesh>(tessellate(make_box(2 * half)));
+  const double r = 0.02, l = 0.15;
+  CollisionOptions opt;
+  opt.margin = 0.01;
+  CollisionModel m({object("box", box, 0), object("capsule", make_capsule(r, l), 1)}, opt);
+  auto box_distance = [&](const Vec3& p) {  // p in the box's frame
+    return (p.cwiseAbs() - half).cwiseMax(0.0).norm();
+  };
+  std::srand(7);
+  auto uni = [] { return 2.0 * std::rand() / RAND_MAX - 1.0; };
+  int near = 0, far = 0;
+  CollisionData d;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const Mat3 Ra = rot(Vec3(uni(), uni(), uni()), 3 * uni());
+    const Mat3 Rb = rot(Vec3(uni(), uni(), uni()), 3 * uni());
+    const Vec3 pb = 0.16 * Vec3(uni(), uni(), uni());
+    // The true gap in the box's frame.
+    const Vec3 c = Ra.transpose() * pb, a = Ra.transpose() * Rb.col(2);
+    double gap = INFINITY;
+    for (int k = 0; k <= 2000; ++k)
+      gap = std::min(gap, box_distance(c + (k / 2000.0 - 0.5) * l * a));
+    gap -= r;
+    if (!(gap > 5e-4) || gap > 0.02 || std::abs(gap - opt.margin) < 2e-4) continue;
+    collide(m, d, {SE3(Ra, Vec3::Zero()), SE3(Rb, pb)});
+    const bool expect = gap < opt.margin;
+    (expect ? near : far) += 1;
+    ASSERT_EQ(!d.contacts.empty(), expect) << "trial " << trial << ": gap " << gap;
+    if (expect) EXPECT_NEAR(-d.contacts[0].depth, gap, 1e-4) << "trial " << trial;
+  }
+  EXPECT_GT(near, 100);
+  EXPECT_GT(far, 100);
 }
 
 TEST(Collision, HullAgainstASphereMatchesTheMesh) {

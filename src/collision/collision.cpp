@@ -56,9 +56,11 @@ struct CollisionModel::Impl {
   double margin = 0;
   int max_contacts = 4;
   // Meshes only: the hull's vertices as three arrays (all x, then all y, then all z) for the
-  // half-space test's one vectorised pass, and the centre and half extents of their box.
+  // half-space test's one vectorised pass.
   std::vector<std::vector<double>> hull_soa;
-  std::vector<std::array<Vec3, 2>> hull_box;
+  // Every object but half-spaces: the centre and half extents of a box around it in its shape
+  // frame (a hull's vertices' box; a primitive's own).
+  std::vector<std::array<Vec3, 2>> box;
   // Half-space candidates: points and their signed distances (reserved once).
   std::vector<Vec3> points;
   std::vector<double> gaps;
@@ -198,7 +200,7 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
   const std::vector<Vec3>* pts = &m.points;
   if (o.shape.type == ShapeType::Mesh) {
     // No vertex is nearer the plane than the nearest corner of the hull's box.
-    const std::array<Vec3, 2>& box = m.hull_box[b];
+    const std::array<Vec3, 2>& box = m.box[b];
     if (nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) return;
     pts = &m.hulls[b]->vertices;
     const int nv = int(pts->size());
@@ -264,6 +266,35 @@ Vec3 support(const CollisionObject& o, const ConvexHull* hull, const SE3& T, con
   return T.p;
 }
 
+// Whether the boxes a and b (centre, half extents in the frames Ta, Tb) are apart by more than
+// gap along one of the 15 separating axes of two boxes (their face normals and the cross
+// products of their edges): the distance of anything inside them is then more than gap.
+bool boxes_apart(const std::array<Vec3, 2>& a, const SE3& Ta, const std::array<Vec3, 2>& b,
+                 const SE3& Tb, double gap) {
+  const Mat3 R = Ta.R.transpose() * Tb.R;  // b's axes in a's frame
+  const Vec3 t = Ta.R.transpose() * (Tb.act(b[0]) - Ta.act(a[0]));
+  const Vec3 &ha = a[1], &hb = b[1];
+  // |R| with a little added, so that near-parallel edges give no false separation.
+  const Mat3 AR = R.cwiseAbs().array() + 1e-12;
+  for (int k = 0; k < 3; ++k) {  // a's axes
+    if (std::abs(t[k]) - ha[k] - AR.row(k).dot(hb) > gap) return true;
+  }
+  for (int k = 0; k < 3; ++k) {  // b's axes
+    if (std::abs(R.col(k).dot(t)) - AR.col(k).dot(ha) - hb[k] > gap) return true;
+  }
+  for (int i = 0; i < 3; ++i) {  // a_i x b_j, of length sin(angle) <= 1: the gap scaled by it
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const double len = std::sqrt(std::max(0.0, 1.0 - R(i, j) * R(i, j)));
+      const double ra = ha[i1] * AR(i2, j) + ha[i2] * AR(i1, j);
+      const double rb = hb[j1] * AR(i, j2) + hb[j2] * AR(i, j1);
+      if (std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j)) - ra - rb > gap * len + 1e-12) return true;
+    }
+  }
+  return false;
+}
+
 // Narrow phase of a pair that passed the filter and the broad phase: FCL's collide first (a
 // penetrating pair: FCL's contacts, EPA or the closed forms FCL has for primitives); a pair it
 // finds apart, FCL's distance (GJK): apart by less than the margin gives one contact of negative
@@ -272,6 +303,8 @@ void collide_pair(CollisionModel& model, int i, int j) {
   CollisionModel::Impl& m = model.impl();
   if (i > j) std::swap(i, j);
   ++m.data->pairs_tested;
+  // Pairs whose boxes are apart by more than the margin touch nowhere: no narrow phase.
+  if (boxes_apart(m.box[i], m.world[i], m.box[j], m.world[j], m.margin)) return;
   const Object& oa = *m.fcl[i];
   const Object& ob = *m.fcl[j];
   // Two primitives: collide() first, as a penetrating pair (resting contact: most pairs that
@@ -395,7 +428,7 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
   m.fcl.resize(n);
   m.hulls.resize(n);
   m.hull_soa.resize(n);
-  m.hull_box.resize(n);
+  m.box.resize(n);
   m.world.resize(n);
   if (!(options_.margin >= 0) || !std::isfinite(options_.margin)) {
     throw std::invalid_argument("collision options: the margin must be >= 0");
@@ -439,7 +472,27 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
         lo = lo.cwiseMin(v[k]);
         hi = hi.cwiseMax(v[k]);
       }
-      m.hull_box[i] = {Vec3((lo + hi) / 2), Vec3((hi - lo) / 2)};
+      m.box[i] = {Vec3((lo + hi) / 2), Vec3((hi - lo) / 2)};
+    } else {
+      const Shape& sh = o.shape;
+      Vec3 half = Vec3::Zero();
+      switch (sh.type) {
+        case ShapeType::Box:
+          half = sh.box / 2;
+          break;
+        case ShapeType::Sphere:
+          half = Vec3::Constant(sh.radius);
+          break;
+        case ShapeType::Cylinder:
+          half = Vec3(sh.radius, sh.radius, sh.length / 2);
+          break;
+        case ShapeType::Capsule:
+          half = Vec3(sh.radius, sh.radius, sh.length / 2 + sh.radius);
+          break;
+        case ShapeType::Mesh:
+          break;
+      }
+      m.box[i] = {Vec3::Zero(), half};
     }
     m.fcl[i] = std::make_unique<Object>(fcl_shape(o, m.hulls[i]));
     m.fcl[i]->setUserData(reinterpret_cast<void*>(std::intptr_t(i)));
