@@ -4,7 +4,8 @@
 Checks the size (1280x1024) and encoding (rgb8), that pixels where a link must be differ from the
 frame drawn before the robot had a pose, that pixels away from the robot do not, and that the
 horizon lies on the row the camera geometry gives; camera_info; the RViz markers naming the
-Panda's meshes; save_frame writing a new file each time; and a second renderer (namespace
+Panda's meshes; save_frame writing a new file each time; scene mesh objects from sim_markers
+(a readable one in its colour, an unreadable one as the grey stand-in); and a second renderer (namespace
 follow) whose camera follows panda_link0, rendering only while someone subscribes. Images and
 markers are read as raw bytes (rospy.AnyMsg).
 """
@@ -164,6 +165,69 @@ class RendererImageTest(unittest.TestCase):
             self.assertTrue(os.path.isfile(r.message), r.message)
             with open(r.message, "rb") as f:
                 self.assertEqual(f.read(4), b"\x89PNG")
+
+    def test_sim_mesh_objects_are_drawn(self):
+        """A scene's mesh object as the simulator publishes it on sim_markers (MESH_RESOURCE,
+        file:// of its path) is drawn with its triangles in its colour; one whose file cannot be
+        read is drawn as the grey stand-in cube."""
+        from visualization_msgs.msg import Marker, MarkerArray
+        path = "/tmp/se3_sim_renderer_check_box_%d.stl" % os.getpid()
+        h = 0.1  # a 0.2 m cube
+        with open(path, "w") as f:
+            f.write("solid box\n")
+            for axis in range(3):
+                for side in (-1, 1):
+                    u, w = (axis + 1) % 3, (axis + 2) % 3
+                    quad = []
+                    for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                        c = [0.0, 0.0, 0.0]
+                        c[axis], c[u], c[w] = side * h, a * h, b * h
+                        quad.append(c)
+                    if side < 0:
+                        quad[1], quad[3] = quad[3], quad[1]
+                    for tri in ((0, 1, 2), (0, 2, 3)):
+                        f.write("facet normal 0 0 0\nouter loop\n")
+                        for k in tri:
+                            f.write("vertex %g %g %g\n" % tuple(quad[k]))
+                        f.write("endloop\nendfacet\n")
+            f.write("endsolid box\n")
+        pub = rospy.Publisher("sim_markers", MarkerArray, queue_size=1, latch=True)
+        before = self.wait_image(time.time())[4]
+        places = {"file://" + path: (0.5, 0.9, 0.3),
+                  "file:///nonexistent/se3_sim_missing.stl": (0.9, 0.4, 0.15)}
+        arr = MarkerArray()
+        for i, (res, pos) in enumerate(sorted(places.items())):
+            m = Marker()
+            m.header.frame_id = "world"
+            m.ns = "objects"
+            m.id = i
+            m.type = Marker.MESH_RESOURCE
+            m.action = Marker.ADD
+            m.mesh_resource = res
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = pos
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = m.scale.z = 1.0
+            m.color.r, m.color.g, m.color.b, m.color.a = 0.9, 0.1, 0.1, 1.0
+            arr.markers.append(m)
+        pub.publish(arr)
+        time.sleep(2.0)
+        after = self.wait_image(time.time())[4]
+        pub.unregister()
+        os.remove(path)
+        u, v = project(places["file://" + path])
+        self.assertTrue(0 <= u < W and 0 <= v < H)
+        r, g, b = self.px(after, u, v)
+        self.assertNotEqual((r, g, b), self.px(before, u, v), "the mesh object is not drawn")
+        self.assertGreater(r, g + 40, "not the object's colour: %s" % ((r, g, b),))
+        self.assertGreater(r, b + 40, "not the object's colour: %s" % ((r, g, b),))
+        # A point 0.3 m above it (about 90 px, the cube's half height about 30 px) is untouched.
+        u2, v2 = project((0.5, 0.9, 0.3 + 0.3))
+        self.assertEqual(self.px(after, u2, v2), self.px(before, u2, v2))
+        # The stand-in: grey (equal channels), where the unreadable mesh's object stands.
+        u, v = project(places["file:///nonexistent/se3_sim_missing.stl"])
+        r, g, b = self.px(after, u, v)
+        self.assertNotEqual((r, g, b), self.px(before, u, v), "no stand-in drawn")
+        self.assertLess(max(abs(r - g), abs(g - b)), 3, "the stand-in is not grey: %s" % ((r, g, b),))
 
     def test_zz_follow_frame(self):
         """Last (name order): it moves panda_link0."""
