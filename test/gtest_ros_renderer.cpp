@@ -352,6 +352,26 @@ TEST(RosRenderer, SceneMeshObjectsAreDrawnWithTheirTriangles) {
   ASSERT_EQ(stand_in.size(), 1u);
   EXPECT_EQ(stand_in[0].type, render::Marker::Type::Box);
   EXPECT_TRUE(stand_in[0].size3.isApprox(0.1 * scale));
+
+  // A flood of distinct resources: kept up to the cap, then stand-ins that are never read
+  // (the readable box under a new scale past the cap is not loaded either).
+  for (std::size_t k = meshes.size(); k < rr::MarkerMeshes::kMaxMeshes; ++k) {
+    visualization_msgs::Marker flood = missing;
+    flood.mesh_resource = "file://" + (dir / ("flood" + std::to_string(k) + ".stl")).string();
+    EXPECT_TRUE(meshes.load(flood));
+  }
+  EXPECT_EQ(meshes.size(), rr::MarkerMeshes::kMaxMeshes);
+  visualization_msgs::Marker late = m;
+  late.scale.x = 5;
+  EXPECT_TRUE(meshes.load(late, &warning));
+  EXPECT_NE(warning.find("distinct mesh resources"), std::string::npos) << warning;
+  visualization_msgs::Marker later = late;
+  later.scale.x = 6;
+  EXPECT_FALSE(meshes.load(later)) << "the cap is announced once";
+  EXPECT_EQ(meshes.size(), rr::MarkerMeshes::kMaxMeshes);
+  EXPECT_TRUE(meshes.failed(late));
+  EXPECT_TRUE(meshes.failed(later));
+  EXPECT_FALSE(meshes.find(m) == nullptr) << "meshes loaded before the cap stay";
   fs::remove_all(dir);
 }
 

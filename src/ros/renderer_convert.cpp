@@ -75,6 +75,18 @@ bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warnin
   if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
   const std::string k = key(m);
   if (meshes_.count(k)) return false;
+  if (meshes_.size() >= kMaxMeshes) {
+    // A publisher that sends ever new resources must not make the node read (and keep)
+    // meshes without end: beyond the cap every new one is a stand-in, never read; one warning.
+    if (capped_) return false;
+    capped_ = true;
+    if (warning) {
+      *warning = "marker " + m.ns + "/" + std::to_string(m.id) + ": mesh '" + m.mesh_resource +
+                 "' not read: more than " + std::to_string(kMaxMeshes) +
+                 " distinct mesh resources and scales; new ones are drawn as stand-in cubes";
+    }
+    return true;
+  }
   const Vec3 scale(m.scale.x, m.scale.y, m.scale.z);
   std::string err;
   Shape shape;
@@ -108,7 +120,7 @@ std::shared_ptr<const render::RenderMesh> MarkerMeshes::find(
 bool MarkerMeshes::failed(const visualization_msgs::Marker& m) const {
   if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
   const auto it = meshes_.find(key(m));
-  return it != meshes_.end() && !it->second;
+  return it == meshes_.end() ? meshes_.size() >= kMaxMeshes : !it->second;
 }
 
 void append_markers(const visualization_msgs::Marker& m, const SE3& frame,

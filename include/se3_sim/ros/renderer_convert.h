@@ -48,15 +48,18 @@ class MarkerMeshes {
   bool load(const visualization_msgs::Marker& m, std::string* warning = nullptr);
   /// The loaded mesh of m, or null (not a mesh marker, not loaded yet, or failed).
   std::shared_ptr<const render::RenderMesh> find(const visualization_msgs::Marker& m) const;
-  /// Whether m's resource failed to load (it is drawn as a stand-in).
+  /// Whether m's resource failed to load, or came past the cap (it is drawn as a stand-in).
   bool failed(const visualization_msgs::Marker& m) const;
   std::size_t size() const { return meshes_.size(); }
+  /// Distinct (resource, scale) pairs kept at most; later new ones are stand-ins, never read.
+  static constexpr std::size_t kMaxMeshes = 256;
 
  private:
   static std::string key(const visualization_msgs::Marker& m);
   ResourceResolver resolver_;
   render::DrawOptions opt_;
   std::map<std::string, std::shared_ptr<const render::RenderMesh>> meshes_;  ///< null: failed
+  bool capped_ = false;  ///< the kMaxMeshes warning was given
 };
 
 /// Appends the render markers of one visualization_msgs/Marker whose frame is at `frame` in
