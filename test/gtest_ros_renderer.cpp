@@ -375,6 +375,59 @@ TEST(RosRenderer, SceneMeshObjectsAreDrawnWithTheirTriangles) {
   fs::remove_all(dir);
 }
 
+// sim_markers kept as RViz keeps them (ADD replaces by ns and id, DELETE, DELETEALL), new solid
+// markers reported for framing, mesh warnings once, and a flood of new ids capped.
+TEST(RosRenderer, SimMarkersAreKeptByNamespaceAndIdWithACap) {
+  using VM = visualization_msgs::Marker;
+  rr::SimMarkers sm;
+  rr::MarkerMeshes meshes(rr::ros_resolver());
+  auto marker = [](const std::string& ns, int id, int type, int action = VM::ADD) {
+    VM m;
+    m.ns = ns;
+    m.id = id;
+    m.type = type;
+    m.action = action;
+    m.scale.x = m.scale.y = m.scale.z = 1;
+    return m;
+  };
+  visualization_msgs::MarkerArray a;
+  a.markers = {marker("objects", 0, VM::SPHERE), marker("objects", 1, VM::CUBE),
+               marker("effort", 0, VM::ARROW)};
+  rr::SimMarkers::Update up = sm.apply(a, meshes);
+  EXPECT_TRUE(up.new_solid);
+  EXPECT_EQ(sm.markers().size(), 3u);
+  a.markers = {marker("objects", 1, VM::CUBE)};  // the same cube again: not new
+  up = sm.apply(a, meshes);
+  EXPECT_FALSE(up.new_solid);
+  EXPECT_EQ(sm.markers().size(), 3u);
+  VM mesh = marker("objects", 2, VM::MESH_RESOURCE);
+  mesh.mesh_resource = "file:///nonexistent/se3_sim_none.stl";
+  a.markers = {mesh, mesh, marker("effort", 0, VM::ARROW, VM::DELETE)};
+  up = sm.apply(a, meshes);
+  EXPECT_TRUE(up.new_solid);
+  ASSERT_EQ(up.warnings.size(), 1u) << "one warning for the unreadable mesh";
+  EXPECT_NE(up.warnings[0].find("se3_sim_none.stl"), std::string::npos);
+  EXPECT_EQ(sm.markers().size(), 3u);
+  EXPECT_EQ(sm.markers().count({"effort", 0}), 0u);
+  a.markers = {marker("", 0, VM::SPHERE, VM::DELETEALL)};
+  sm.apply(a, meshes);
+  EXPECT_TRUE(sm.markers().empty());
+  // A flood: kMaxMarkers kept, the rest dropped and counted; updates of kept ones still apply.
+  a.markers.clear();
+  for (std::size_t k = 0; k < rr::SimMarkers::kMaxMarkers + 25; ++k) {
+    a.markers.push_back(marker("flood", int(k), VM::SPHERE));
+  }
+  up = sm.apply(a, meshes);
+  EXPECT_EQ(sm.markers().size(), rr::SimMarkers::kMaxMarkers);
+  EXPECT_EQ(up.dropped, 25u);
+  VM moved = marker("flood", 3, VM::SPHERE);
+  moved.pose.position.x = 2.5;
+  a.markers = {moved};
+  up = sm.apply(a, meshes);
+  EXPECT_EQ(up.dropped, 0u);
+  EXPECT_EQ(sm.markers().at({"flood", 3}).pose.position.x, 2.5);
+}
+
 // follow_frame: the camera keeps its offset from a moving frame, and a user's change of view
 // is kept as the new offset.
 TEST(RosRenderer, FollowCameraKeepsItsOffset) {

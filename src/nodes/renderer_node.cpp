@@ -214,27 +214,14 @@ class RendererNode {
 
   // ---------------------------------------------------------------- inputs
   void on_sim_markers(const visualization_msgs::MarkerArray::ConstPtr& msg) {
-    for (const auto& m : msg->markers) {
-      if (m.action == visualization_msgs::Marker::DELETEALL) {
-        sim_markers_.clear();
-        continue;
-      }
-      const auto key = std::make_pair(m.ns, m.id);
-      if (m.action == visualization_msgs::Marker::DELETE) {
-        sim_markers_.erase(key);
-        continue;
-      }
-      // A box or mesh that is new (e.g. the scene's satellite bus, a mesh object) is solid
-      // geometry: frame it too.
-      if ((m.type == visualization_msgs::Marker::CUBE ||
-           m.type == visualization_msgs::Marker::MESH_RESOURCE) &&
-          !sim_markers_.count(key)) {
-        framed_ = false;
-      }
-      // A mesh object's triangles are loaded here, once per resource, not per frame.
-      std::string warning;
-      if (marker_meshes_.load(m, &warning)) ROS_WARN("renderer: %s", warning.c_str());
-      sim_markers_[key] = m;
+    const rr::SimMarkers::Update up = sim_markers_.apply(*msg, marker_meshes_);
+    // A box or mesh that is new (e.g. the scene's satellite bus, a mesh object) is solid
+    // geometry: frame it too.
+    if (up.new_solid) framed_ = false;
+    for (const std::string& w : up.warnings) ROS_WARN("renderer: %s", w.c_str());
+    if (up.dropped) {
+      ROS_WARN_THROTTLE(10, "renderer: sim_markers: %zu new markers dropped (%zu kept at most)",
+                        up.dropped, rr::SimMarkers::kMaxMarkers);
     }
   }
 
@@ -291,7 +278,7 @@ class RendererNode {
   // ---------------------------------------------------------------- markers
   std::vector<rn::Marker> convert_markers() {
     std::vector<rn::Marker> out;
-    for (const auto& kv : sim_markers_) {
+    for (const auto& kv : sim_markers_.markers()) {
       const visualization_msgs::Marker& m = kv.second;
       SE3 frame;
       const std::string id = se3::frame_name(m.header.frame_id);
@@ -376,7 +363,7 @@ class RendererNode {
   std::unique_ptr<se3::Model> model_;
   std::vector<SE3> poses_, offsets_inv_, item_offsets_inv_;
   ros::WallTime last_model_try_;
-  std::map<std::pair<std::string, int>, visualization_msgs::Marker> sim_markers_;
+  rr::SimMarkers sim_markers_;
   rr::MarkerMeshes marker_meshes_;
   rn::Overlay overlay_;
   sensor_msgs::Image image_;

@@ -123,6 +123,39 @@ bool MarkerMeshes::failed(const visualization_msgs::Marker& m) const {
   return it == meshes_.end() ? meshes_.size() >= kMaxMeshes : !it->second;
 }
 
+SimMarkers::Update SimMarkers::apply(const visualization_msgs::MarkerArray& msg,
+                                     MarkerMeshes& meshes) {
+  using VM = visualization_msgs::Marker;
+  Update up;
+  for (const auto& m : msg.markers) {
+    if (m.action == VM::DELETEALL) {
+      markers_.clear();
+      continue;
+    }
+    const auto key = std::make_pair(m.ns, m.id);
+    if (m.action == VM::DELETE) {
+      markers_.erase(key);
+      continue;
+    }
+    const auto it = markers_.find(key);
+    if (it == markers_.end()) {
+      if (markers_.size() >= kMaxMarkers) {
+        ++up.dropped;
+        continue;
+      }
+      if (m.type == VM::CUBE || m.type == VM::MESH_RESOURCE) up.new_solid = true;
+    }
+    std::string warning;
+    if (meshes.load(m, &warning)) up.warnings.push_back(warning);
+    if (it == markers_.end()) {
+      markers_.emplace(key, m);
+    } else {
+      it->second = m;
+    }
+  }
+  return up;
+}
+
 void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
                     std::vector<render::Marker>& out, const MarkerMeshes* meshes) {
   const SE3 pose = frame * to_se3(m.pose);

@@ -62,6 +62,26 @@ class MarkerMeshes {
   bool capped_ = false;  ///< the kMaxMeshes warning was given
 };
 
+/// The markers the renderer draws from sim_markers, kept by (ns, id) as RViz keeps them: ADD
+/// (and MODIFY) replaces, DELETE removes, DELETEALL empties; at most kMaxMarkers are kept (a new
+/// one past the cap is dropped). Mesh markers' triangles are loaded into `meshes` on arrival.
+class SimMarkers {
+ public:
+  static constexpr std::size_t kMaxMarkers = 10000;
+  struct Update {
+    bool new_solid = false;             ///< a CUBE or MESH_RESOURCE not seen before (worth framing)
+    std::size_t dropped = 0;            ///< new markers past the cap
+    std::vector<std::string> warnings;  ///< meshes that could not be read (once each)
+  };
+  Update apply(const visualization_msgs::MarkerArray& msg, MarkerMeshes& meshes);
+  const std::map<std::pair<std::string, int>, visualization_msgs::Marker>& markers() const {
+    return markers_;
+  }
+
+ private:
+  std::map<std::pair<std::string, int>, visualization_msgs::Marker> markers_;
+};
+
 /// Appends the render markers of one visualization_msgs/Marker whose frame is at `frame` in
 /// the renderer's fixed frame: SPHERE, CUBE, CYLINDER, ARROW, POINTS, SPHERE_LIST, LINE_STRIP,
 /// LINE_LIST, and MESH_RESOURCE when `meshes` holds its mesh (a failed one as its stand-in
