@@ -4,6 +4,12 @@
 // (24) of the body's own velocity), not ad*_{Vdot_j}; with that change the recursion matches
 // RNEA(ABA(tau)) = tau and the oracles to rounding. Gravity enters as the fictitious base
 // acceleration Vdot_{-1} = [0; -R0^T g] (section 4.3).
+// GCC's code hoisting lifts the loads that the joint forms' copies of the step share above their
+// dispatch, where they are spilled to the stack and read back (docs/performance.md): off for this
+// file.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-code-hoisting")
+#endif
 #include "joint.h"
 #include "se3_sim/dynamics.h"
 
