@@ -40,7 +40,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     double* A = data.A[i].data();
     const Inertia& I = model.inertia[i];
     double* F = data.F[i].data();
-    detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
       if (p == 0 && !model.floating) {
         // On the fixed base: V_p = 0 and A_p = [0; ag], so V = S qd, V x S qd = 0 and
