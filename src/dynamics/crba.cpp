@@ -9,6 +9,12 @@
 // - world frame (deep chains): composite inertias add without transforms, and
 //   D_ji = S_j^T (Ic_i S_i) with world axes, six multiply-adds per entry instead of a wrench
 //   transform per entry.
+// GCC's code hoisting lifts the loads that the joint forms' copies of a step share above their
+// dispatch, where they are spilled to the stack and read back (docs/performance.md): off for this
+// file.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-code-hoisting")
+#endif
 #include "joint.h"
 #include "row_kernel.h"
 #include "se3_sim/dynamics.h"
