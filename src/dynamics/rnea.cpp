@@ -66,10 +66,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
       J.add_bias_acceleration(V, qd, A);
       A[k] += qdd;
       // (36), own-body term: F = J A - ad*_V (J V).
-      double B[6];
-      detail::inertia_times(I, A, F);
-      detail::bias_force(I, V, B);
-      for (int r = 0; r < 6; ++r) F[r] += B[r];
+      detail::newton_euler(I, V, A, F);
     });
   }
   for (int i = model.n; i >= 1; --i) {
