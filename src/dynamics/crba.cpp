@@ -15,6 +15,8 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC optimize("no-code-hoisting")
 #endif
+#include <type_traits>
+
 #include "joint.h"
 #include "row_kernel.h"
 #include "se3_sim/dynamics.h"
@@ -82,6 +84,28 @@ SE3_KERNEL void add_transformed(const Inertia& in, const SE3& f, Inertia& out) {
   }
 }
 
+// Component kp of Ad*_{Xup^-1} F_c for the columns c in [col, end), written to F[kp][c]: the
+// only entries of the columns the parent reads when it is the last row they enter (SE3_NOINLINE:
+// inlined, it made GCC allocate crba_local's registers worse, docs/performance.md).
+SE3_NOINLINE void wrench_components_to_parent(const JointModel& jm, int kp, const double* R,
+                                              const double* t, int col, int end,
+                                              double* const (&F)[6]) {
+  detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
+    auto columns = [&](auto k) SE3_LAMBDA {
+      for (int c = col; c < end; ++c) {
+        double x[6];
+        for (int r = 0; r < 6; ++r) x[r] = F[r][c];
+        F[k][c] = detail::force_to_parent_component<J.z_rotation, J.offset, k>(R, t, x);
+      }
+    };
+    if (kp == 2) {
+      columns(std::integral_constant<int, 2>());
+    } else {
+      columns(std::integral_constant<int, 5>());
+    }
+  });
+}
+
 const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
   const int nv = model.nv;
   detail::joint_transforms(model, data, q);
@@ -115,6 +139,12 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     if (!carry) continue;
     const double* R = data.Xup[i].R.data();
     const double* t = data.Xup[i].p.data();
+    if (!model.floating && model.parent[p] == 0) {
+      // The parent sits on the fixed base: its row is the last one these columns enter, and it
+      // reads only component k_p (its joint axis) of each wrench.
+      wrench_components_to_parent(jm, model.joints[p].axis(), R, t, col, end, F);
+      continue;
+    }
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       for (int c = col; c < end; ++c) {
         double x[6];

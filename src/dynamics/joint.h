@@ -22,12 +22,16 @@
 // recursion's step stays one function (GCC otherwise stops inlining the larger ones, with calls
 // and spills that cost more than the forms save).
 // SE3_LAMBDA does the same for the steps handed to with_joint.
+// SE3_NOINLINE keeps a rarely taken step out of its caller, whose registers GCC allocates worse
+// with it inside.
 #if defined(__GNUC__)
 #define SE3_KERNEL inline __attribute__((always_inline))
 #define SE3_LAMBDA __attribute__((always_inline))
+#define SE3_NOINLINE __attribute__((noinline))
 #else
 #define SE3_KERNEL inline
 #define SE3_LAMBDA
+#define SE3_NOINLINE
 #endif
 
 namespace se3 {
@@ -278,6 +282,22 @@ SE3_KERNEL void force_to_parent(const double* R, const double* p, double (&x)[6]
   x[1] = plus_cross<PM, 1>(n[1], p, f);
   x[2] = plus_cross<PM, 2>(n[2], p, f);
   x[3] = f[0], x[4] = f[1], x[5] = f[2];
+}
+
+/// Component K of force_to_parent's result (K = 2: the torque's z, 5: the force's z), the same
+/// sums without the other components.
+template <bool Z, int PM, int K>
+SE3_KERNEL double force_to_parent_component(const double* R, const double* p,
+                                            const double (&x)[6]) {
+  if constexpr (K == 5) {
+    return Z ? x[5] : R[2] * x[3] + R[5] * x[4] + R[8] * x[5];
+  } else {
+    static_assert(K == 2, "a joint axis is component 2 or 5");
+    double f[3];
+    rotate<Z>(R, x[3], x[4], x[5], f);
+    const double n2 = Z ? x[2] : R[2] * x[0] + R[5] * x[1] + R[8] * x[2];
+    return plus_cross<PM, 2>(n2, p, f);
+  }
 }
 
 /// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f). Z, PM: force_to_parent's.
