@@ -28,6 +28,8 @@ namespace {
 // out += `in` placed at f (Ad*_{f^-1} J Ad_{f^-1}): Inertia::add_transformed's sums, inline, and
 // for Z (f.R = [Q 0; 0 1]) without the products with R's exact zeros. With g = R h:
 // h' = g + m p, I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2.
+// out.I's lower triangle is set to its upper one (Inertia::add_transformed adds to both, which
+// differ only where a body's inertia is not symmetric to the last bit).
 template <bool Z>
 SE3_KERNEL void add_transformed(const Inertia& in, const SE3& f, Inertia& out) {
   const double m = in.m;
@@ -78,7 +80,7 @@ SE3_KERNEL void add_transformed(const Inertia& in, const SE3& f, Inertia& out) {
         o[4 * r] += rir - 2 * w[r] * p3[r] + d;
       } else {
         const double x = rir - (w[r] * p3[c] + p3[r] * w[c]);
-        o[r + 3 * c] += x, o[c + 3 * r] += x;
+        o[c + 3 * r] = o[r + 3 * c] += x;  // the lower triangle a copy of the upper
       }
     }
   }
