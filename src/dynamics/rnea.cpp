@@ -23,8 +23,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     data.V[0] = v.head<6>();
     data.A[0] = a.head<6>();
     data.A[0].tail<3>() += ag;
-    const Inertia& I0 = model.inertia[0];
-    data.F[0] = I0 * data.A[0] + cross_force(data.V[0], I0 * data.V[0]);
+    detail::newton_euler(model.inertia[0], data.V[0].data(), data.A[0].data(), data.F[0].data());
     if (f_ext_base) data.F[0] -= *f_ext_base;
   } else {
     data.V[0].setZero();
