@@ -5,10 +5,11 @@
 // RNEA(ABA(tau)) = tau and the oracles to rounding. Gravity enters as the fictitious base
 // acceleration Vdot_{-1} = [0; -R0^T g] (section 4.3).
 // GCC's code hoisting lifts the loads that the joint forms' copies of the step share above their
-// dispatch, where they are spilled to the stack and read back (docs/performance.md): off for this
-// file.
+// dispatch, where they are spilled to the stack and read back: off for this file. Scheduling
+// before register allocation with register pressure in view (and IRA's loop pressure) spills
+// less of the step's twenty-odd live values (docs/performance.md).
 #if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC optimize("no-code-hoisting")
+#pragma GCC optimize("no-code-hoisting", "sched-pressure", "schedule-insns", "ira-loop-pressure")
 #endif
 #include "joint.h"
 #include "se3_sim/dynamics.h"
