@@ -14,6 +14,7 @@
 #include <random>
 #include <type_traits>
 
+#include "../src/dynamics/joint.h"
 #include "../src/dynamics/row_kernel.h"
 #include "test_util.h"
 
@@ -580,6 +581,56 @@ TEST(Dynamics, PairedRowKernelEqualsItsScalarReference) {
     }
   }
   EXPECT_GT(compared, 20000);
+}
+
+// detail::newton_euler (RNEA's own-body wrench, rearranged by Jacobi's identity) against the
+// direct J A + V x* (J V) of inertia_times and bias_force, to rounding, on random inertias and
+// motions.
+TEST(Dynamics, NewtonEulerWrenchEqualsItsDirectForm) {
+  std::mt19937_64 rng(79);
+  std::uniform_real_distribution<double> u(-1, 1);
+  double worst = 0;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Mat3 L = Mat3::Random();
+    const Inertia I = Inertia::from_com(0.1 + 3 * (u(rng) + 1), Vec3(u(rng), u(rng), u(rng)),
+                                        L * L.transpose() + 0.1 * Mat3::Identity());
+    double V[6], A[6], F[6], G[6], B[6];
+    for (int r = 0; r < 6; ++r) V[r] = 3 * u(rng), A[r] = 3 * u(rng);
+    detail::newton_euler(I, V, A, F);
+    detail::inertia_times(I, A, G);
+    detail::bias_force(I, V, B);
+    double scale = 0, err = 0;
+    for (int r = 0; r < 6; ++r) {
+      scale = std::max(scale, std::abs(G[r]) + std::abs(B[r]));
+      err = std::max(err, std::abs(F[r] - (G[r] + B[r])));
+    }
+    worst = std::max(worst, err / scale);
+  }
+  EXPECT_LT(worst, 1e-14);
+}
+
+// force_to_parent_component (crba's last row) gives force_to_parent's component to the bit.
+template <bool Z, int PM>
+void expect_wrench_component_equals_full_transform(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 100; ++trial) {
+    SE3 X(exp_so3(Vec3(u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)));
+    if (Z) X.R = Eigen::AngleAxisd(3 * u(rng), Vec3::UnitZ()).toRotationMatrix();
+    double x[6], full[6];
+    for (int r = 0; r < 6; ++r) full[r] = x[r] = u(rng);
+    detail::force_to_parent<Z, PM>(X.R.data(), X.p.data(), full);
+    ASSERT_EQ(full[2], (detail::force_to_parent_component<Z, PM, 2>(X.R.data(), X.p.data(), x)));
+    ASSERT_EQ(full[5], (detail::force_to_parent_component<Z, PM, 5>(X.R.data(), X.p.data(), x)));
+  }
+}
+
+TEST(Dynamics, WrenchComponentToParentEqualsTheFullTransform) {
+  std::mt19937_64 rng(80);
+  expect_wrench_component_equals_full_transform<false, 7>(rng);
+  expect_wrench_component_equals_full_transform<true, 7>(rng);
+  expect_wrench_component_equals_full_transform<false, 3>(rng);
+  expect_wrench_component_equals_full_transform<true, 6>(rng);
+  expect_wrench_component_equals_full_transform<false, 1>(rng);
 }
 
 int main(int argc, char** argv) {

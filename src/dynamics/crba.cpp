@@ -9,6 +9,14 @@
 // - world frame (deep chains): composite inertias add without transforms, and
 //   D_ji = S_j^T (Ic_i S_i) with world axes, six multiply-adds per entry instead of a wrench
 //   transform per entry.
+// GCC's code hoisting lifts the loads that the joint forms' copies of a step share above their
+// dispatch, where they are spilled to the stack and read back (docs/performance.md): off for this
+// file.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-code-hoisting")
+#endif
+#include <type_traits>
+
 #include "joint.h"
 #include "row_kernel.h"
 #include "se3_sim/dynamics.h"
@@ -20,56 +28,84 @@ namespace {
 // out += `in` placed at f (Ad*_{f^-1} J Ad_{f^-1}): Inertia::add_transformed's sums, inline, and
 // for Z (f.R = [Q 0; 0 1]) without the products with R's exact zeros. With g = R h:
 // h' = g + m p, I' = R I R^T + (2 p.g + m p.p) 1 - (w p^T + p w^T), w = g + m p / 2.
+// out.I's lower triangle is set to its upper one (Inertia::add_transformed adds to both, which
+// differ only where a body's inertia is not symmetric to the last bit).
 template <bool Z>
 SE3_KERNEL void add_transformed(const Inertia& in, const SE3& f, Inertia& out) {
   const double m = in.m;
   const double* h = in.h.data();
   const double* R = f.R.data();  // column-major: R(r, c) = R[r + 3 c]
   const double* J = in.I.data();
-  double g[3], Zr[3][3];  // g = R h, Zr = R I
+  double g[3];  // g = R h
   if constexpr (Z) {
-    const double q00 = R[0], q10 = R[1], q01 = R[3], q11 = R[4];
-    g[0] = q00 * h[0] + q01 * h[1], g[1] = q10 * h[0] + q11 * h[1], g[2] = h[2];
-    for (int c = 0; c < 3; ++c) {
-      Zr[0][c] = q00 * J[3 * c] + q01 * J[3 * c + 1];
-      Zr[1][c] = q10 * J[3 * c] + q11 * J[3 * c + 1];
-      Zr[2][c] = J[3 * c + 2];
-    }
+    g[0] = R[0] * h[0] + R[3] * h[1], g[1] = R[1] * h[0] + R[4] * h[1], g[2] = h[2];
   } else {
-    for (int r = 0; r < 3; ++r) {
-      const double r0 = R[r], r1 = R[r + 3], r2 = R[r + 6];
-      g[r] = r0 * h[0] + r1 * h[1] + r2 * h[2];
-      for (int c = 0; c < 3; ++c) {
-        Zr[r][c] = r0 * J[3 * c] + r1 * J[3 * c + 1] + r2 * J[3 * c + 2];
-      }
-    }
+    for (int r = 0; r < 3; ++r) g[r] = R[r] * h[0] + R[r + 3] * h[1] + R[r + 6] * h[2];
   }
-  // (R I R^T)(r, c) = sum_k Zr(r, k) R(c, k).
-  auto rir = [&](int r, int c) {
-    if constexpr (Z) {
-      return c == 2 ? Zr[r][2] : Zr[r][0] * R[c] + Zr[r][1] * R[c + 3];
-    } else {
-      return Zr[r][0] * R[c] + Zr[r][1] * R[c + 3] + Zr[r][2] * R[c + 6];
-    }
-  };
   const double px = f.p[0], py = f.p[1], pz = f.p[2];
+  const double p3[3] = {px, py, pz};
   const double gx = g[0], gy = g[1], gz = g[2];
   const double d = 2.0 * (px * gx + py * gy + pz * gz) + m * (px * px + py * py + pz * pz);
-  const double w0 = gx + 0.5 * m * px, w1 = gy + 0.5 * m * py, w2 = gz + 0.5 * m * pz;
+  const double w[3] = {gx + 0.5 * m * px, gy + 0.5 * m * py, gz + 0.5 * m * pz};
   out.m += m;
   out.h[0] += gx + m * px;
   out.h[1] += gy + m * py;
   out.h[2] += gz + m * pz;
   double* o = out.I.data();
-  const double i01 = rir(0, 1) - (w0 * py + px * w1);
-  const double i02 = rir(0, 2) - (w0 * pz + px * w2);
-  const double i12 = rir(1, 2) - (w1 * pz + py * w2);
-  o[0] += rir(0, 0) - 2 * w0 * px + d;
-  o[4] += rir(1, 1) - 2 * w1 * py + d;
-  o[8] += rir(2, 2) - 2 * w2 * pz + d;
-  o[1] += i01, o[3] += i01;
-  o[2] += i02, o[6] += i02;
-  o[5] += i12, o[7] += i12;
+  // Row r of Z = R I, then the upper triangle's row r of Z R^T, (R I R^T)(r, c) =
+  // sum_k Z(r, k) R(c, k), and its parallel-axis terms: one row of Z live at a time.
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    double z[3];
+    if constexpr (Z) {
+      if (r == 2) {
+        z[0] = J[2], z[1] = J[5], z[2] = J[8];
+      } else {
+        const double q0 = R[r], q1 = R[r + 3];
+        for (int c = 0; c < 3; ++c) z[c] = q0 * J[3 * c] + q1 * J[3 * c + 1];
+      }
+    } else {
+      const double r0 = R[r], r1 = R[r + 3], r2 = R[r + 6];
+      for (int c = 0; c < 3; ++c) z[c] = r0 * J[3 * c] + r1 * J[3 * c + 1] + r2 * J[3 * c + 2];
+    }
+#pragma GCC unroll 3
+    for (int c = r; c < 3; ++c) {
+      double rir;
+      if constexpr (Z) {
+        rir = c == 2 ? z[2] : z[0] * R[c] + z[1] * R[c + 3];
+      } else {
+        rir = z[0] * R[c] + z[1] * R[c + 3] + z[2] * R[c + 6];
+      }
+      if (c == r) {
+        o[4 * r] += rir - 2 * w[r] * p3[r] + d;
+      } else {
+        const double x = rir - (w[r] * p3[c] + p3[r] * w[c]);
+        o[c + 3 * r] = o[r + 3 * c] += x;  // the lower triangle a copy of the upper
+      }
+    }
+  }
+}
+
+// Component kp of Ad*_{Xup^-1} F_c for the columns c in [col, end), written to F[kp][c]: the
+// only entries of the columns the parent reads when it is the last row they enter (SE3_NOINLINE:
+// inlined, it made GCC allocate crba_local's registers worse, docs/performance.md).
+SE3_NOINLINE void wrench_components_to_parent(const JointModel& jm, int kp, const double* R,
+                                              const double* t, int col, int end,
+                                              double* const (&F)[6]) {
+  detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
+    auto columns = [&](auto k) SE3_LAMBDA {
+      for (int c = col; c < end; ++c) {
+        double x[6];
+        for (int r = 0; r < 6; ++r) x[r] = F[r][c];
+        F[k][c] = detail::force_to_parent_component<J.z_rotation, J.offset, k>(R, t, x);
+      }
+    };
+    if (kp == 2) {
+      columns(std::integral_constant<int, 2>());
+    } else {
+      columns(std::integral_constant<int, 5>());
+    }
+  });
 }
 
 const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
@@ -105,6 +141,12 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
     if (!carry) continue;
     const double* R = data.Xup[i].R.data();
     const double* t = data.Xup[i].p.data();
+    if (!model.floating && model.parent[p] == 0) {
+      // The parent sits on the fixed base: its row is the last one these columns enter, and it
+      // reads only component k_p (its joint axis) of each wrench.
+      wrench_components_to_parent(jm, model.joints[p].axis(), R, t, col, end, F);
+      continue;
+    }
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       for (int c = col; c < end; ++c) {
         double x[6];

@@ -4,6 +4,13 @@
 // (24) of the body's own velocity), not ad*_{Vdot_j}; with that change the recursion matches
 // RNEA(ABA(tau)) = tau and the oracles to rounding. Gravity enters as the fictitious base
 // acceleration Vdot_{-1} = [0; -R0^T g] (section 4.3).
+// GCC's code hoisting lifts the loads that the joint forms' copies of the step share above their
+// dispatch, where they are spilled to the stack and read back: off for this file. Scheduling
+// before register allocation with register pressure in view (and IRA's loop pressure) spills
+// less of the step's twenty-odd live values (docs/performance.md).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-code-hoisting", "sched-pressure", "schedule-insns", "ira-loop-pressure")
+#endif
 #include "joint.h"
 #include "se3_sim/dynamics.h"
 
@@ -17,8 +24,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     data.V[0] = v.head<6>();
     data.A[0] = a.head<6>();
     data.A[0].tail<3>() += ag;
-    const Inertia& I0 = model.inertia[0];
-    data.F[0] = I0 * data.A[0] + cross_force(data.V[0], I0 * data.V[0]);
+    detail::newton_euler(model.inertia[0], data.V[0].data(), data.A[0].data(), data.F[0].data());
     if (f_ext_base) data.F[0] -= *f_ext_base;
   } else {
     data.V[0].setZero();
@@ -34,7 +40,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     double* A = data.A[i].data();
     const Inertia& I = model.inertia[i];
     double* F = data.F[i].data();
-    detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {
+    detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
       if (p == 0 && !model.floating) {
         // On the fixed base: V_p = 0 and A_p = [0; ag], so V = S qd, V x S qd = 0 and
@@ -60,10 +66,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
       J.add_bias_acceleration(V, qd, A);
       A[k] += qdd;
       // (36), own-body term: F = J A - ad*_V (J V).
-      double B[6];
-      detail::inertia_times(I, A, F);
-      detail::bias_force(I, V, B);
-      for (int r = 0; r < 6; ++r) F[r] += B[r];
+      detail::newton_euler(I, V, A, F);
     });
   }
   for (int i = model.n; i >= 1; --i) {
