@@ -98,8 +98,9 @@ struct DelassusWorkspace {
 /// columns are the robot's and Minv = D^-1 its inverse mass matrix (nv x nv, symmetric):
 /// Y.topRows(nv) = D^-1 J^T and the lower triangle of W = J D^-1 J^T (entries above the
 /// diagonal may be written too). A contact row moves only its link's ancestor joints and a free
-/// base: each row's non-zero columns are found from J and the sums run over those alone (nv <=
-/// 64; dense beyond), equal to the dense products up to rounding. ws.reserve(nv, rows' capacity).
+/// base: each row's non-zero columns are found from J and the sums run over those alone (dense
+/// for nv > 64, few rows, or when the groups of rows would cost more than they save), equal to
+/// the dense products up to rounding. ws.reserve(nv, rows' capacity).
 void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W, DelassusWorkspace& ws);
 

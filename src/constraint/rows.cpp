@@ -80,7 +80,9 @@ int group_end(const std::vector<std::uint64_t>& mask, int g0, int rows) {
 
 void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W, DelassusWorkspace& ws) {
-  if (nv > 64) return dense_delassus(J, rows, nv, Minv, Y, W);  // a mask holds 64 columns
+  // A mask holds 64 columns. Up to 2 nv rows the sparse products could save a few thousand
+  // multiply-adds at most, less than finding the masks and groups costs.
+  if (nv > 64 || rows <= 2 * nv) return dense_delassus(J, rows, nv, Minv, Y, W);
   for (int r = 0; r < rows; ++r) {
     const double* j = J.row(r).data();  // row-major: row r is contiguous
     std::uint64_t m = 0;
