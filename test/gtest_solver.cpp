@@ -287,6 +287,9 @@ TEST(Delassus, RobotBlockIsTheDenseProductWithContactsOnEveryLink) {
               se3_test::rel_err(Y.topRows(m.nv), Yd), se3_test::rel_err(Wl, Wdl));
   EXPECT_LT(se3_test::rel_err(Wl, Wdl), 1e-13);
   for (int q = 0; q <= last; ++q) EXPECT_EQ(W(last, q), 0.0);
+  for (int q = 1; q < n; ++q) {
+    for (int r = 0; r < q; ++r) ASSERT_EQ(W(r, q), 7.0) << "above the diagonal: " << r << ", " << q;
+  }
 
   // The test's reach: contact rows have only their link's ancestors and the base non-zero (so
   // the sparse sums are exercised), and every non-zero J(r, a) moves row r of W by well above

@@ -96,11 +96,11 @@ struct DelassusWorkspace {
 
 /// The robot's block of the Delassus matrix of the first `rows` rows of J, whose first nv
 /// columns are the robot's and Minv = D^-1 its inverse mass matrix (nv x nv, symmetric):
-/// Y.topRows(nv) = D^-1 J^T and the lower triangle of W = J D^-1 J^T (entries above the
-/// diagonal may be written too). A contact row moves only its link's ancestor joints and a free
-/// base: each row's non-zero columns are found from J and the sums run over those alone (dense
-/// for nv > 64, few rows, or when the groups of rows would cost more than they save), equal to
-/// the dense products up to rounding. ws.reserve(nv, rows' capacity).
+/// Y.topRows(nv) = D^-1 J^T and the lower triangle of W = J D^-1 J^T (the upper untouched).
+/// A contact row moves only its link's ancestor joints and a free base: each row's non-zero
+/// columns are found from J and the sums run over those alone (dense for nv > 64, few rows, or
+/// when the groups of rows would cost more than they save), equal to the dense products up to
+/// rounding. ws.reserve(nv, rows' capacity).
 void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W, DelassusWorkspace& ws);
 

@@ -110,12 +110,14 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
     const int n = g1 - g0;
     int s = 0;
     for (std::uint64_t m = mask; m; m &= m - 1) cols[s++] = __builtin_ctzll(m);
+    // The group's rows of the lower triangle: left of its diagonal block, and that block's own.
     auto Yg = Y.block(0, g0, nv, n);
-    // The group's rows of the lower triangle (and above it in the diagonal block).
-    auto Wg = W.block(g0, 0, n, g1);
+    auto Wl = W.block(g0, 0, n, g0);
+    auto Wd = W.block(g0, g0, n, n).triangularView<Eigen::Lower>();
     if (s == 0) {
       Yg.setZero();
-      Wg.setZero();
+      Wl.setZero();
+      Wd.setZero();
       g0 = g1;
       continue;
     }
@@ -129,7 +131,8 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
     Yg.noalias() = Mc * Jc.transpose();
     auto Yc = ws.Yc.topLeftCorner(s, g1);
     for (int k = 0; k < s; ++k) Yc.row(k) = Y.row(cols[k]).head(g1);
-    Wg.noalias() = Jc * Yc;
+    if (g0 > 0) Wl.noalias() = Jc * Yc.leftCols(g0);
+    Wd = Jc * Yc.rightCols(n);
     g0 = g1;
   }
 }
