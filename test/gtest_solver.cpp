@@ -2,15 +2,18 @@
 // answers: a box resting on the ground (the normal impulses carry m g h, shared by the four
 // corners), sliding (the tangential velocity drops by mu g h) and sticking (below mu g h it
 // stops), a rank-deficient bilateral pair (the pseudo-inverse), and a stack of three boxes,
-// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact.
+// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact; the
+// robot's Delassus block over each row's non-zero columns against the dense product.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <vector>
 
 #include "se3_sim/constraint.h"
 #include "se3_sim/solver.h"
+#include "test_util.h"
 
 using namespace se3;
 
@@ -222,4 +225,88 @@ TEST(Solver, StackOfThreeIsSoftUnderFewPgsSweepsAndExactUnderTheActiveSet) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// The robot's block of the Delassus matrix, summed over each row's non-zero columns only
+// (robot_delassus), equals the dense products D^-1 J^T and J D^-1 J^T up to rounding: solo12
+// (free base, four legs) with a contact on every link, rows between two legs (self-collision),
+// and a row that touches only a free body's columns. Every non-zero entry of J carries weight
+// in W, so a column left out of a row's sum shows far above the tolerance.
+TEST(Delassus, RobotBlockIsTheDenseProductWithContactsOnEveryLink) {
+  UrdfOptions opt;
+  opt.floating = true;
+  const Model m = model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
+  ASSERT_EQ(m.nv, 18);
+  std::mt19937_64 rng(14);
+  const se3_test::RandomState s = se3_test::random_state(m, rng);
+  Data data(m);
+  forward_kinematics(m, data, s.base, s.q);
+  SystemKinematics kin;
+  kin.reset(m, data.oMb, 0);
+  kin.update_world_axes();
+
+  const int nv = m.nv + 6;  // the robot, then a free body's six columns
+  ConstraintRows rows;
+  constexpr int kPerLink = 12;  // four contacts on every link: a normal and two tangents each
+  rows.reserve(nv, kPerLink * (m.n + 1) + 4);
+  for (int i = 0; i <= m.n; ++i) {
+    for (int k = 0; k < kPerLink; ++k) {
+      const Vec3 p = data.oMb[i].act(se3_test::random_vec(rng, 3, 0.05));
+      const int r = rows.add(RowType::ContactNormal, i);
+      point_jacobian(kin, i, p, se3_test::random_unit(rng), 1.0, rows.row(r));
+    }
+  }
+  for (int leg = 0; leg < 3; ++leg) {  // the foot of one leg against the next leg's foot
+    const int a = 3 * leg + 3, b = 3 * leg + 6;
+    const Vec3 d = se3_test::random_unit(rng);
+    const Vec3 pa = data.oMb[a].act(se3_test::random_vec(rng, 3, 0.05));
+    const Vec3 pb = data.oMb[b].act(se3_test::random_vec(rng, 3, 0.05));
+    const int r = rows.add(RowType::ContactNormal, leg);
+    point_jacobian(kin, a, pa, d, 1.0, rows.row(r));
+    point_jacobian(kin, b, pb, d, -1.0, rows.row(r));
+  }
+  const int last = rows.add(RowType::ContactNormal, 0);  // the free body's alone
+  rows.J.row(last).tail<6>() = se3_test::random_vec(rng, 6, 1.0).transpose();
+  const int n = rows.count;
+
+  const MatX& Minv = minv(m, data, s.base, s.q);
+  const MatX Jr = rows.J.topLeftCorner(n, m.nv);
+  const MatX Yd = Minv * Jr.transpose();
+  const MatX Wd = Jr * Yd;
+
+  DelassusWorkspace ws;
+  ws.reserve(m.nv, n);
+  MatX Y = MatX::Constant(nv, n, 7.0), W = MatX::Constant(n, n, 7.0);
+  robot_delassus(rows.J, n, m.nv, Minv, Y, W, ws);
+
+  EXPECT_LT(se3_test::rel_err(Y.topRows(m.nv), Yd), 1e-13);
+  EXPECT_EQ(Y.bottomRows(6), MatX::Constant(6, n, 7.0));  // not the robot's: untouched
+  const MatX Wl = W.triangularView<Eigen::Lower>();
+  const MatX Wdl = Wd.triangularView<Eigen::Lower>();
+  std::printf("robot_delassus against the dense products: Y %.2g, W %.2g (relative)\n",
+              se3_test::rel_err(Y.topRows(m.nv), Yd), se3_test::rel_err(Wl, Wdl));
+  EXPECT_LT(se3_test::rel_err(Wl, Wdl), 1e-13);
+  for (int q = 0; q <= last; ++q) EXPECT_EQ(W(last, q), 0.0);
+  for (int q = 1; q < n; ++q) {
+    for (int r = 0; r < q; ++r) ASSERT_EQ(W(r, q), 7.0) << "above the diagonal: " << r << ", " << q;
+  }
+
+  // The test's reach: contact rows have only their link's ancestors and the base non-zero (so
+  // the sparse sums are exercised), and every non-zero J(r, a) moves row r of W by well above
+  // the tolerance (so a dropped column fails).
+  const double scale = Wd.cwiseAbs().maxCoeff();
+  for (int r = 0; r < n; ++r) {
+    int nonzero = 0;
+    for (int a = 0; a < m.nv; ++a) {
+      if (Jr(r, a) == 0) continue;
+      ++nonzero;
+      EXPECT_GT(std::abs(Jr(r, a)) * Yd.row(a).cwiseAbs().maxCoeff(), 1e-8 * scale)
+          << "row " << r << ", column " << a;
+    }
+    if (r < kPerLink * (m.n + 1)) {
+      int depth = 0;
+      for (int j = rows.id[r]; j >= 1; j = m.parent[j]) ++depth;
+      EXPECT_EQ(nonzero, 6 + depth) << "row " << r;
+    }
+  }
 }

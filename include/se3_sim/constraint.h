@@ -86,6 +86,24 @@ struct ConstraintRows {
   double* row(int r) { return J.row(r).data(); }
 };
 
+/// What robot_delassus keeps between calls (sized by reserve; a call allocates nothing).
+struct DelassusWorkspace {
+  std::vector<std::uint64_t> mask;  ///< per row: bit a set when J(r, a) != 0
+  MatX Jc, Mc, Yc;  ///< one group's J(rows, S), D^-1(:, S), Y(S, :) over its columns S
+
+  void reserve(int nv, int capacity);
+};
+
+/// The robot's block of the Delassus matrix of the first `rows` rows of J, whose first nv
+/// columns are the robot's and Minv = D^-1 its inverse mass matrix (nv x nv, symmetric):
+/// Y.topRows(nv) = D^-1 J^T and the lower triangle of W = J D^-1 J^T (the upper untouched).
+/// A contact row moves only its link's ancestor joints and a free base: each row's non-zero
+/// columns are found from J and the sums run over those alone (dense for nv > 64, few rows, or
+/// when the groups of rows would cost more than they save), equal to the dense products up to
+/// rounding. ws.reserve(nv, rows' capacity).
+void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
+                    MatX& W, DelassusWorkspace& ws);
+
 /// row[col0 + k] += s d . (v_k + w_k x p) over the coordinates k that move `body` (its path to the
 /// root, a free base's six): the velocity of the world point p fixed on `body` along the world
 /// direction d. The one point Jacobian every builder uses. body < 0 (the world) adds nothing.

@@ -307,6 +307,7 @@ class ConstraintSystem final : public AccelerationHook {
   MatX Y_, W_;
   VecX c_, p_;
   std::vector<std::uint64_t> row_mask_;  ///< per row: bit s set when it touches system s
+  DelassusWorkspace delassus_ws_;        ///< robot_delassus's
   std::vector<Vec3> warm_contact_;       ///< last impulses (n, t1, t2) per contact sphere
   /// Contacts from outside (the collision layer) have no identity across steps: the last
   /// step's are kept with their world impulse, and a new contact of the same object pair takes

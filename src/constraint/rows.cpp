@@ -1,6 +1,7 @@
 // The rows of one step and their builders (constraint.h).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 
 #include "se3_sim/constraint.h"
@@ -48,6 +49,92 @@ int ConstraintRows::add(RowType t, int producer) {
   mu[r] = 0;
   gap[r] = 0;
   return r;
+}
+
+void DelassusWorkspace::reserve(int nv, int capacity) {
+  mask.assign(capacity, 0);
+  const int c = std::min(nv, 64);
+  Jc = MatX::Zero(capacity, c);
+  Mc = MatX::Zero(nv, c);
+  Yc = MatX::Zero(c, capacity);
+}
+
+namespace {
+
+// The dense products, for every row's columns.
+void dense_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
+                    MatX& W) {
+  auto Jr = J.topLeftCorner(rows, nv);
+  Y.topLeftCorner(nv, rows).noalias() = Minv * Jr.transpose();
+  W.topLeftCorner(rows, rows).triangularView<Eigen::Lower>() = Jr * Y.topLeftCorner(nv, rows);
+}
+
+// The end of the group of consecutive rows that share row g0's mask.
+int group_end(const std::vector<std::uint64_t>& mask, int g0, int rows) {
+  int g1 = g0 + 1;
+  while (g1 < rows && mask[g1] == mask[g0]) ++g1;
+  return g1;
+}
+
+}  // namespace
+
+void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
+                    MatX& W, DelassusWorkspace& ws) {
+  // A mask holds 64 columns. Up to 2 nv rows the sparse products could save a few thousand
+  // multiply-adds at most, less than finding the masks and groups costs.
+  if (nv > 64 || rows <= 2 * nv) return dense_delassus(J, rows, nv, Minv, Y, W);
+  for (int r = 0; r < rows; ++r) {
+    const double* j = J.row(r).data();  // row-major: row r is contiguous
+    std::uint64_t m = 0;
+    for (int a = 0; a < nv; ++a) {
+      if (j[a] != 0) m |= std::uint64_t(1) << a;
+    }
+    ws.mask[r] = m;
+  }
+  // The multiply-adds of both ways; a group's gathers and product calls cost about as much as
+  // kGroupCost of them, so few rows in many groups (small problems) go dense.
+  constexpr double kGroupCost = 2000;
+  const double dense = double(rows) * nv * (0.5 * (rows + 1) + nv);
+  double sparse = 0;
+  for (int g0 = 0; g0 < rows;) {
+    const int g1 = group_end(ws.mask, g0, rows);
+    sparse += double(g1 - g0) * __builtin_popcountll(ws.mask[g0]) * (g1 + nv) + kGroupCost;
+    g0 = g1;
+  }
+  if (sparse >= dense) return dense_delassus(J, rows, nv, Minv, Y, W);
+
+  int cols[64];
+  for (int g0 = 0; g0 < rows;) {
+    const std::uint64_t mask = ws.mask[g0];
+    const int g1 = group_end(ws.mask, g0, rows);
+    const int n = g1 - g0;
+    int s = 0;
+    for (std::uint64_t m = mask; m; m &= m - 1) cols[s++] = __builtin_ctzll(m);
+    // The group's rows of the lower triangle: left of its diagonal block, and that block's own.
+    auto Yg = Y.block(0, g0, nv, n);
+    auto Wl = W.block(g0, 0, n, g0);
+    auto Wd = W.block(g0, g0, n, n).triangularView<Eigen::Lower>();
+    if (s == 0) {
+      Yg.setZero();
+      Wl.setZero();
+      Wd.setZero();
+      g0 = g1;
+      continue;
+    }
+    auto Jc = ws.Jc.topLeftCorner(n, s);
+    auto Mc = ws.Mc.leftCols(s);
+    for (int k = 0; k < s; ++k) {
+      Jc.col(k) = J.col(cols[k]).segment(g0, n);
+      Mc.col(k) = Minv.col(cols[k]);
+    }
+    // Y(:, group) = D^-1(:, S) J(group, S)^T; W(group, 0..g1) = J(group, S) Y(S, 0..g1).
+    Yg.noalias() = Mc * Jc.transpose();
+    auto Yc = ws.Yc.topLeftCorner(s, g1);
+    for (int k = 0; k < s; ++k) Yc.row(k) = Y.row(cols[k]).head(g1);
+    if (g0 > 0) Wl.noalias() = Jc * Yc.leftCols(g0);
+    Wd = Jc * Yc.rightCols(n);
+    g0 = g1;
+  }
 }
 
 void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,

@@ -289,6 +289,7 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   p_ = VecX::Zero(max_rows_);
   vfree_ = VecX::Zero(nv_total_);
   row_mask_.assign(max_rows_, 0);
+  delassus_ws_.reserve(model_.nv, max_rows_);
   one_contact_.assign(1, Contact{});
   warm_ext_.assign(std::max(0, max_external_contacts), WarmExternal{});
   warm_ext_next_.assign(warm_ext_.size(), WarmExternal{});
@@ -671,13 +672,14 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     const int nsys = 1 + static_cast<int>(free_.size());
     if (nsys > 64) {  // dense (a mask per row holds 64 systems)
       const MatX& Minv = minv(m, data_, x.base, x.q);
-      Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
+      robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
       for (size_t j = 0; j < free_.size(); ++j) {
         const int c0 = nvr + 6 * static_cast<int>(j);
         Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
       }
       auto W = W_.topLeftCorner(rows, rows);
-      W.triangularView<Eigen::Lower>() = J * Y;
+      W.triangularView<Eigen::Lower>() +=
+          J.rightCols(J.cols() - nvr) * Y.bottomRows(Y.rows() - nvr);
     } else {
       // Block-sparse: a contact row touches at most two systems (the robot, free bodies), and
       // D^-1 is block-diagonal by system, so W(r, s) sums only over the systems both rows
@@ -694,7 +696,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
                                                      [](std::uint64_t k) { return k & 1; });
       if (robot_rows) {
         const MatX& Minv = minv(m, data_, x.base, x.q);
-        Y.topRows(nvr).noalias() = Minv * J.leftCols(nvr).transpose();
+        robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
       } else {
         Y.topRows(nvr).setZero();
       }
@@ -709,9 +711,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
           }
         }
       }
-      // The robot's block by the (triangular) GEMM, the free bodies' blocks by their masks.
-      auto W = W_.topLeftCorner(rows, rows);
-      if (robot_rows) W.triangularView<Eigen::Lower>() = J.leftCols(nvr) * Y.topRows(nvr);
+      // W's robot block is robot_delassus's; the free bodies' blocks are added by their masks.
       for (int r = 0; r < rows; ++r) {
         const std::uint64_t mr = row_mask_[r] & ~std::uint64_t(1);
         if (!mr && robot_rows) continue;
