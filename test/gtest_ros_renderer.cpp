@@ -22,6 +22,39 @@ using namespace se3;
 namespace rr = se3::ros_renderer;
 namespace fs = std::filesystem;
 
+namespace {
+
+// The sim_markers a scene object of this shape, colour and pose gives (the simulator's
+// append_object_markers), as the renderer node receives them.
+visualization_msgs::MarkerArray object_markers(const Shape& shape, const Vec4f& rgba,
+                                               const SE3& pose) {
+  SceneObject o;
+  o.name = "thing";
+  o.shape = shape;
+  o.material.rgba = rgba;
+  o.material.has_color = true;
+  ObjectState st;
+  st.name = o.name;
+  st.pose = pose;
+  visualization_msgs::MarkerArray arr;
+  se3_ros::append_object_markers({o}, {st}, "world", ros::Time(), arr);
+  return arr;
+}
+
+// A 320 x 240 pinhole of focal length 300 px looking from eye at target.
+render::Camera small_camera(const Vec3& eye, const Vec3& target) {
+  render::Camera cam;
+  cam.width = 320;
+  cam.height = 240;
+  cam.focal_px = 300;
+  cam.eye = eye;
+  cam.target = target;
+  cam.update();
+  return cam;
+}
+
+}  // namespace
+
 TEST(RosRenderer, CameraInfoIsThePinhole) {
   render::Camera cam;
   cam.focal_px = 900;
@@ -135,13 +168,7 @@ TEST(RosRenderer, SimMarkersAndCameraCommand) {
 // rims and end spheres through the camera) within 2 px; the capsule's middle is filled, not
 // only its end balls.
 TEST(RosRenderer, SceneCylindersAndCapsulesAreDrawnWhereTheyProject) {
-  render::Camera cam;
-  cam.width = 320;
-  cam.height = 240;
-  cam.focal_px = 300;
-  cam.eye = Vec3(3, 0, 0.6);
-  cam.target = Vec3(0, 0, 0.6);
-  cam.update();
+  const render::Camera cam = small_camera(Vec3(3, 0, 0.6), Vec3(0, 0, 0.6));
   const double r = 0.2, l = 0.6;
   // Axis z of the shape along world y, then turned 0.4 rad about world z.
   const Mat3 R =
@@ -150,16 +177,8 @@ TEST(RosRenderer, SceneCylindersAndCapsulesAreDrawnWhereTheyProject) {
   const SE3 pose(R, Vec3(0, 0, 0.6));
   for (const bool capsule : {false, true}) {
     SCOPED_TRACE(capsule ? "capsule" : "cylinder");
-    SceneObject o;
-    o.name = "thing";
-    o.shape = capsule ? make_capsule(r, l) : make_cylinder(r, l);
-    o.material.rgba = Vec4f(0.9f, 0.1f, 0.1f, 1.0f);
-    o.material.has_color = true;
-    ObjectState st;
-    st.name = o.name;
-    st.pose = pose;
-    visualization_msgs::MarkerArray arr;
-    se3_ros::append_object_markers({o}, {st}, "world", ros::Time(), arr);
+    const visualization_msgs::MarkerArray arr = object_markers(
+        capsule ? make_capsule(r, l) : make_cylinder(r, l), Vec4f(0.9f, 0.1f, 0.1f, 1.0f), pose);
     ASSERT_EQ(arr.markers.size(), capsule ? 3u : 1u);
     std::vector<render::Marker> markers;
     for (const auto& m : arr.markers) rr::append_markers(m, SE3(), markers);
@@ -262,28 +281,16 @@ TEST(RosRenderer, SceneMeshObjectsAreDrawnWithTheirTriangles) {
     }
     f << "endsolid box\n";
   }
-  render::Camera cam;
-  cam.width = 320;
-  cam.height = 240;
-  cam.focal_px = 300;
-  cam.eye = Vec3(1.6, -1.2, 1.0);
-  cam.target = Vec3(0, 0, 0.3);
-  cam.update();
+  const render::Camera cam = small_camera(Vec3(1.6, -1.2, 1.0), Vec3(0, 0, 0.3));
   const SE3 pose(Eigen::AngleAxisd(0.5, Vec3(1, 2, 3).normalized()).toRotationMatrix(),
                  Vec3(0.05, 0.0, 0.3));
   const Vec3 scale(1, 2, 3);
 
-  SceneObject o;
-  o.name = "crate";
+  Shape crate;
   std::string err;
-  ASSERT_TRUE(load_mesh_shape(stl, scale, ResourceResolver(), o.shape, &err)) << err;
-  o.material.rgba = Vec4f(0.1f, 0.2f, 0.9f, 1.0f);
-  o.material.has_color = true;
-  ObjectState st;
-  st.name = o.name;
-  st.pose = pose;
-  visualization_msgs::MarkerArray arr;
-  se3_ros::append_object_markers({o}, {st}, "world", ros::Time(), arr);
+  ASSERT_TRUE(load_mesh_shape(stl, scale, ResourceResolver(), crate, &err)) << err;
+  const visualization_msgs::MarkerArray arr =
+      object_markers(crate, Vec4f(0.1f, 0.2f, 0.9f, 1.0f), pose);
   ASSERT_EQ(arr.markers.size(), 1u);
   const visualization_msgs::Marker& m = arr.markers[0];
   ASSERT_EQ(m.type, visualization_msgs::Marker::MESH_RESOURCE);

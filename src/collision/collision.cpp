@@ -129,8 +129,8 @@ void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, 
                  double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
                  std::vector<double>& dist, std::vector<double>& tu, std::vector<double>& tv) {
   picked.clear();
-  // The candidates without a branch per point (cand and dist hold at least pts.size()
-  // entries), then the deepest among them (the first of equal ones).
+  // The candidates without a branch per point, then the deepest among them (the first of
+  // equal ones).
   const int np = int(pts.size());
   int nc = 0;
   int* cs = cand.data();

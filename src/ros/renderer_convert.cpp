@@ -65,16 +65,19 @@ geometry_msgs::Pose to_pose(const SE3& f) {
 MarkerMeshes::MarkerMeshes(ResourceResolver resolver, const render::DrawOptions& opt)
     : resolver_(std::move(resolver)), opt_(opt) {}
 
-std::string MarkerMeshes::key(const visualization_msgs::Marker& m) {
-  char scale[96];
-  std::snprintf(scale, sizeof scale, " %.17g %.17g %.17g", m.scale.x, m.scale.y, m.scale.z);
-  return m.mesh_resource + scale;
+MarkerMeshes::KeyRef MarkerMeshes::key(const visualization_msgs::Marker& m) {
+  auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  return KeyRef(m.mesh_resource, bits(m.scale.x), bits(m.scale.y), bits(m.scale.z));
 }
 
 bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warning) {
   if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
-  const std::string k = key(m);
-  if (meshes_.count(k)) return false;
+  const KeyRef k = key(m);
+  if (meshes_.find(k) != meshes_.end()) return false;
   if (meshes_.size() >= kMaxMeshes) {
     // A publisher that sends ever new resources must not make the node read (and keep)
     // meshes without end: beyond the cap every new one is a stand-in, never read; one warning.
@@ -96,13 +99,13 @@ bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warnin
     err = "no mesh_resource";
   } else if (load_mesh_shape(m.mesh_resource, scale, resolver_, shape, &err) && shape.mesh &&
              shape.mesh->triangle_count() > 0) {
-    meshes_[k] = std::make_shared<render::RenderMesh>(
+    meshes_[Key(k)] = std::make_shared<render::RenderMesh>(
         render::make_render_mesh(*shape.mesh, scale, Eigen::Vector3f::Constant(0.75f), opt_));
     return false;
   } else if (err.empty()) {
     err = "the mesh has no triangles";
   }
-  meshes_[k] = nullptr;
+  meshes_[Key(k)] = nullptr;
   if (warning) {
     *warning = "marker " + m.ns + "/" + std::to_string(m.id) + ": mesh '" + m.mesh_resource +
                "' not drawn (" + err + "); a stand-in cube is drawn instead";
@@ -110,17 +113,17 @@ bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warnin
   return true;
 }
 
-std::shared_ptr<const render::RenderMesh> MarkerMeshes::find(
-    const visualization_msgs::Marker& m) const {
-  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return nullptr;
+MarkerMeshes::Lookup MarkerMeshes::lookup(const visualization_msgs::Marker& m) const {
+  Lookup out;
+  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return out;
   const auto it = meshes_.find(key(m));
-  return it == meshes_.end() ? nullptr : it->second;
-}
-
-bool MarkerMeshes::failed(const visualization_msgs::Marker& m) const {
-  if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
-  const auto it = meshes_.find(key(m));
-  return it == meshes_.end() ? meshes_.size() >= kMaxMeshes : !it->second;
+  if (it == meshes_.end()) {
+    out.stand_in = meshes_.size() >= kMaxMeshes;
+  } else {
+    out.mesh = it->second;
+    out.stand_in = !it->second;
+  }
+  return out;
 }
 
 SimMarkers::Update SimMarkers::apply(const visualization_msgs::MarkerArray& msg,
@@ -219,12 +222,13 @@ void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
       if (!meshes) break;
       r.a = pose.p;
       r.R = pose.R;
-      if (auto mesh = meshes->find(m)) {
+      MarkerMeshes::Lookup found = meshes->lookup(m);
+      if (found.mesh) {
         r.type = render::Marker::Type::Mesh;
-        r.mesh = std::move(mesh);
+        r.mesh = std::move(found.mesh);
         r.mesh_colors = m.mesh_use_embedded_materials;
         out.push_back(r);
-      } else if (meshes->failed(m)) {
+      } else if (found.stand_in) {
         r.type = render::Marker::Type::Box;
         r.size3 = 0.1 * Vec3(m.scale.x, m.scale.y, m.scale.z).cwiseAbs();
         r.color = Eigen::Vector3d::Constant(0.6);

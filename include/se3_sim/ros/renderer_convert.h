@@ -11,9 +11,12 @@
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "se3_sim/geometry.h"
@@ -46,19 +49,32 @@ class MarkerMeshes {
   /// it when the marker arrives, not per frame). Returns true and the warning in *warning the
   /// first time a resource fails.
   bool load(const visualization_msgs::Marker& m, std::string* warning = nullptr);
-  /// The loaded mesh of m, or null (not a mesh marker, not loaded yet, or failed).
-  std::shared_ptr<const render::RenderMesh> find(const visualization_msgs::Marker& m) const;
-  /// Whether m's resource failed to load, or came past the cap (it is drawn as a stand-in).
-  bool failed(const visualization_msgs::Marker& m) const;
+  /// What to draw for m: its loaded mesh, or a stand-in (its resource failed to load, or came
+  /// past the cap), or neither (not a mesh marker, not loaded yet). One map lookup, no
+  /// allocation: append_markers calls it per marker and frame.
+  struct Lookup {
+    std::shared_ptr<const render::RenderMesh> mesh;
+    bool stand_in = false;
+  };
+  Lookup lookup(const visualization_msgs::Marker& m) const;
+  /// The loaded mesh of m, or null (lookup(m).mesh).
+  std::shared_ptr<const render::RenderMesh> find(const visualization_msgs::Marker& m) const {
+    return lookup(m).mesh;
+  }
+  /// Whether m is drawn as a stand-in (lookup(m).stand_in).
+  bool failed(const visualization_msgs::Marker& m) const { return lookup(m).stand_in; }
   std::size_t size() const { return meshes_.size(); }
   /// Distinct (resource, scale) pairs kept at most; later new ones are stand-ins, never read.
   static constexpr std::size_t kMaxMeshes = 256;
 
  private:
-  static std::string key(const visualization_msgs::Marker& m);
+  // (resource, the scale's three doubles as bits: a total order, NaN included).
+  using Key = std::tuple<std::string, std::uint64_t, std::uint64_t, std::uint64_t>;
+  using KeyRef = std::tuple<const std::string&, std::uint64_t, std::uint64_t, std::uint64_t>;
+  static KeyRef key(const visualization_msgs::Marker& m);
   ResourceResolver resolver_;
   render::DrawOptions opt_;
-  std::map<std::string, std::shared_ptr<const render::RenderMesh>> meshes_;  ///< null: failed
+  std::map<Key, std::shared_ptr<const render::RenderMesh>, std::less<>> meshes_;  ///< null: failed
   bool capped_ = false;  ///< the kMaxMeshes warning was given
 };
 
