@@ -7,6 +7,10 @@
 # sanitizer report, a crash or a fuzz finding is a failure.
 #
 # Usage: scripts/sanitize.sh [--results DIR] [--fuzz-seconds N] [--no-gtests] [--no-fuzz]
+#                            [--build-only | --no-build]
+# --build-only builds and stops (scripts/test.sh runs it beside the normal build's tests, at the
+# lowest priority); --no-build runs what an earlier --build-only built. The gtests and the fuzz
+# targets run two at a time (nproc at most).
 # Environment: SE3_SANITIZE_GTEST_FILTER (default below) selects the gtest cases.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -14,13 +18,17 @@ results="$repo/.build/san/test_results"
 fuzz_seconds=10
 run_gtests=1
 run_fuzz=1
+do_build=1
+do_run=1
 while (($#)); do
   case "$1" in
     --results) results=$2; shift 2 ;;
     --fuzz-seconds) fuzz_seconds=$2; shift 2 ;;
     --no-gtests) run_gtests=0; shift ;;
     --no-fuzz) run_fuzz=0; shift ;;
-    *) echo "usage: scripts/sanitize.sh [--results DIR] [--fuzz-seconds N] [--no-gtests] [--no-fuzz]" >&2; exit 2 ;;
+    --build-only) do_run=0; shift ;;
+    --no-build) do_build=0; shift ;;
+    *) echo "usage: scripts/sanitize.sh [--results DIR] [--fuzz-seconds N] [--no-gtests] [--no-fuzz] [--build-only | --no-build]" >&2; exit 2 ;;
   esac
 done
 # Cases left out of the sanitizer run: the long runs (tens to hundreds of simulated seconds),
@@ -60,12 +68,17 @@ declare -A seeds=([urdf]="data/robots config/robots" [scene]="config/scenes"
   [controllers]="config/controllers")
 
 t0=$(date +%s)
+ok_mark="$repo/.build/san/build.ok"
+if ((do_build)); then
+rm -f "$ok_mark"
 echo "se3_sim: sanitizer build (clang, ASan + UBSan) in $ws (log: .build/san/build.log)"
 cd "$ws"
 # RelWithDebInfo at -O1 with line tables and assertions on (Eigen's index checks included):
-# fast enough to run the suite, slow enough to keep stack traces exact.
+# fast enough to run the suite, slow enough to keep stack traces exact. SE3_SIM_NO_FORCED_INLINE:
+# the dynamics kernels are inlined where the compiler chooses (forced, aba.cpp alone takes 80 s
+# to compile under the sanitizers; the checks see the same code either way).
 catkin_make -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DSE3_SIM_NO_FORCED_INLINE" \
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
   -DCMAKE_CXX_FLAGS="$san" -DCMAKE_C_FLAGS="$san" \
   -DCMAKE_EXE_LINKER_FLAGS="$san" -DCMAKE_SHARED_LINKER_FLAGS="$san" \
@@ -78,8 +91,13 @@ catkin_make -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_C
   echo '<testsuites><testsuite name="sanitize"><testcase classname="sanitize" name="build"><failure message="the sanitizer build failed: .build/san/build.log"/></testcase></testsuite></testsuites>' > "$results/gtest-sanitize_build.xml"
   exit 1
 }
+touch "$ok_mark"
+fi
+# --no-build after a failed --build-only: the failure is reported already.
+[[ -f $ok_mark ]] || { echo "se3_sim: no sanitizer build to run (see .build/san/build.log)"; exit 1; }
 t1=$(date +%s)
-echo "se3_sim: sanitizer build took $((t1 - t0)) s"
+((do_build)) && echo "se3_sim: sanitizer build took $((t1 - t0)) s"
+((do_run)) || exit 0
 bin="$ws/devel/lib/se3_sim"
 # The sanitized libraries, not those of the main build that env.sh put on LD_LIBRARY_PATH (which
 # wins over the binaries' RUNPATH): uninstrumented libraries give the fuzzers no coverage and the
@@ -106,20 +124,64 @@ out="$results/sanitize"
 mkdir -p "$out"
 rm -f "$out"/*.xml "$out"/*.log
 
+# Runs at most $par of the jobs started with throttle at once.
+par=$(( $(nproc) < 2 ? $(nproc) : 2 ))
+throttle() {
+  while (($(jobs -rp | wc -l) >= par)); do wait -n || true; done
+}
+
+san_gtest() {  # name
+  local t=$1 xml="$out/gtest-sanitize_$1.xml" code=0 reason
+  (cd "$repo" && "$bin/$t" --gtest_filter="$filter" --gtest_output="xml:$xml") \
+    > "$out/$t.log" 2>&1 || code=$?
+  if ((code != 0)); then
+    reason=$(grep -m1 -E "ERROR: (Address|Leak)Sanitizer|runtime error:|FAILED" "$out/$t.log" || true)
+    fail_xml "sanitize_$t" "exit_code" "$out/gtest-sanitize_${t}_exit.xml" \
+      "$t exited $code under the sanitizers: ${reason:-see $out/$t.log}"
+    echo "  $t: exit $code ${reason}"
+  fi
+}
+
+san_fuzz() {  # fuzz_NAME
+  local f=$1 name=${1#fuzz_} code=0 runs
+  local dirs=("$repo/fuzz/corpus/$name") extra
+  for extra in ${seeds[$name]:-}; do dirs+=("$repo/$extra"); done
+  local art="$repo/.build/san/fuzz-artifacts/$name"
+  local scratch="$repo/.build/san/fuzz-scratch/$name"
+  rm -rf "$scratch"
+  mkdir -p "$art" "$scratch"
+  local opts=(-timeout=10 -rss_limit_mb=2048 -artifact_prefix="$art/" -print_final_stats=1)
+  [[ -f "$repo/fuzz/$name.dict" ]] && opts+=(-dict="$repo/fuzz/$name.dict")
+  "$bin/$f" "${opts[@]}" -runs=0 "${dirs[@]}" > "$out/$f.replay.log" 2>&1 || code=$?
+  if ((code != 0)); then
+    fail_xml "fuzz_$name" "corpus_replay" "$out/gtest-fuzz_${name}_replay.xml" \
+      "$f on its corpus exited $code: $(grep -m1 -E 'ERROR|runtime error|deadly' "$out/$f.replay.log")"
+    echo "  $f corpus replay: exit $code"
+  else
+    pass_xml "fuzz_$name" "corpus_replay" "$out/gtest-fuzz_${name}_replay.xml"
+  fi
+  ((fuzz_seconds > 0)) || return 0
+  code=0
+  "$bin/$f" "${opts[@]}" -seed=1 -max_total_time="$fuzz_seconds" "$scratch" "${dirs[@]}" \
+    > "$out/$f.run.log" 2>&1 || code=$?
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$out/$f.run.log")
+  if ((code != 0)); then
+    fail_xml "fuzz_$name" "bounded_run" "$out/gtest-fuzz_${name}_run.xml" \
+      "$f found an input (exit $code, artifact in $art): $(grep -m1 -E 'ERROR|runtime error|deadly|timeout' "$out/$f.run.log")"
+    echo "  $f: exit $code after ${runs:-?} runs"
+  else
+    pass_xml "fuzz_$name" "bounded_run" "$out/gtest-fuzz_${name}_run.xml"
+    echo "  $f: ${runs:-?} runs in ${fuzz_seconds} s, nothing found"
+  fi
+}
+
 if ((run_gtests)); then
-  echo "se3_sim: gtests under ASan + UBSan (filter '$filter')"
+  echo "se3_sim: gtests under ASan + UBSan, $par at a time (filter '$filter')"
   for t in "${gtests[@]}"; do
-    xml="$out/gtest-sanitize_$t.xml"
-    code=0
-    (cd "$repo" && "$bin/$t" --gtest_filter="$filter" --gtest_output="xml:$xml") \
-      > "$out/$t.log" 2>&1 || code=$?
-    if ((code != 0)); then
-      reason=$(grep -m1 -E "ERROR: (Address|Leak)Sanitizer|runtime error:|FAILED" "$out/$t.log" || true)
-      fail_xml "sanitize_$t" "exit_code" "$out/gtest-sanitize_${t}_exit.xml" \
-        "$t exited $code under the sanitizers: ${reason:-see $out/$t.log}"
-      echo "  $t: exit $code ${reason}"
-    fi
+    throttle
+    san_gtest "$t" &
   done
+  wait
   t2=$(date +%s)
   echo "se3_sim: sanitizer gtests took $((t2 - t1)) s"
 else
@@ -127,41 +189,12 @@ else
 fi
 
 if ((run_fuzz)); then
-  echo "se3_sim: fuzz corpus replay and ${fuzz_seconds} s per fuzz target"
+  echo "se3_sim: fuzz corpus replay and ${fuzz_seconds} s per fuzz target, $par at a time"
   for f in "${fuzzers[@]}"; do
-    name=${f#fuzz_}
-    dirs=("$repo/fuzz/corpus/$name")
-    for extra in ${seeds[$name]:-}; do dirs+=("$repo/$extra"); done
-    art="$repo/.build/san/fuzz-artifacts/$name"
-    scratch="$repo/.build/san/fuzz-scratch/$name"
-    rm -rf "$scratch"
-    mkdir -p "$art" "$scratch"
-    opts=(-timeout=10 -rss_limit_mb=2048 -artifact_prefix="$art/" -print_final_stats=1)
-    [[ -f "$repo/fuzz/$name.dict" ]] && opts+=(-dict="$repo/fuzz/$name.dict")
-    code=0
-    "$bin/$f" "${opts[@]}" -runs=0 "${dirs[@]}" > "$out/$f.replay.log" 2>&1 || code=$?
-    if ((code != 0)); then
-      fail_xml "fuzz_$name" "corpus_replay" "$out/gtest-fuzz_${name}_replay.xml" \
-        "$f on its corpus exited $code: $(grep -m1 -E 'ERROR|runtime error|deadly' "$out/$f.replay.log")"
-      echo "  $f corpus replay: exit $code"
-    else
-      pass_xml "fuzz_$name" "corpus_replay" "$out/gtest-fuzz_${name}_replay.xml"
-    fi
-    if ((fuzz_seconds > 0)); then
-      code=0
-      "$bin/$f" "${opts[@]}" -seed=1 -max_total_time="$fuzz_seconds" "$scratch" "${dirs[@]}" \
-        > "$out/$f.run.log" 2>&1 || code=$?
-      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$out/$f.run.log")
-      if ((code != 0)); then
-        fail_xml "fuzz_$name" "bounded_run" "$out/gtest-fuzz_${name}_run.xml" \
-          "$f found an input (exit $code, artifact in $art): $(grep -m1 -E 'ERROR|runtime error|deadly|timeout' "$out/$f.run.log")"
-        echo "  $f: exit $code after ${runs:-?} runs"
-      else
-        pass_xml "fuzz_$name" "bounded_run" "$out/gtest-fuzz_${name}_run.xml"
-        echo "  $f: ${runs:-?} runs in ${fuzz_seconds} s, nothing found"
-      fi
-    fi
+    throttle
+    san_fuzz "$f" &
   done
+  wait
 fi
 t3=$(date +%s)
 echo "se3_sim: sanitizer stage: build $((t1 - t0)) s, gtests $((t2 - t1)) s, fuzz $((t3 - t2)) s"

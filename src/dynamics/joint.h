@@ -23,8 +23,9 @@
 // and spills that cost more than the forms save).
 // SE3_LAMBDA does the same for the steps handed to with_joint.
 // SE3_NOINLINE keeps a rarely taken step out of its caller, whose registers GCC allocates worse
-// with it inside.
-#if defined(__GNUC__)
+// with it inside. SE3_SIM_NO_FORCED_INLINE leaves inlining to the compiler (the sanitizer build:
+// the same code, compiled in a fraction of the time).
+#if defined(__GNUC__) && !defined(SE3_SIM_NO_FORCED_INLINE)
 #define SE3_KERNEL inline __attribute__((always_inline))
 #define SE3_LAMBDA __attribute__((always_inline))
 #define SE3_NOINLINE __attribute__((noinline))
