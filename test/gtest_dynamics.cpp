@@ -633,6 +633,55 @@ TEST(Dynamics, WrenchComponentToParentEqualsTheFullTransform) {
   expect_wrench_component_equals_full_transform<false, 1>(rng);
 }
 
+// The joint forms (detail::kZ, detail::kAxisRow + k) skip only products with exact zeros (and
+// kZ's exact one), in the general kernels' order: on every robot and chain, ABA, RNEA and CRBA
+// give the same numbers as with every joint in the general form.
+TEST(Dynamics, JointFormsGiveTheGeneralFormsNumbers) {
+  int row_forms = 0;
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.label);
+    Model general = c.model;
+    for (int i = 1; i <= general.n; ++i) {
+      general.joints[i].z_rotation = false;
+      general.joints[i].axis_row = -1;
+      row_forms += c.model.joints[i].axis_row >= 0;
+    }
+    Data d(c.model), dg(general);
+    std::mt19937_64 rng(90);
+    for (int k = 0; k < kStates; ++k) {
+      const RandomState s = se3_test::random_state(c.model, rng);
+      const VecX ddq = aba(c.model, d, s.base, s.q, s.v, s.u);
+      const VecX ddq_g = aba(general, dg, s.base, s.q, s.v, s.u);
+      for (int r = 0; r < ddq.size(); ++r) ASSERT_EQ(ddq[r], ddq_g[r]) << "aba " << r;
+      const VecX tau = rnea(c.model, d, s.base, s.q, s.v, ddq);
+      const VecX tau_g = rnea(general, dg, s.base, s.q, s.v, ddq);
+      for (int r = 0; r < tau.size(); ++r) ASSERT_EQ(tau[r], tau_g[r]) << "rnea " << r;
+      const MatX M = crba(c.model, d, s.base, s.q);
+      const MatX M_g = crba(general, dg, s.base, s.q);
+      ASSERT_TRUE((M.array() == M_g.array()).all()) << "crba";
+    }
+  }
+  EXPECT_GT(row_forms, 20);  // the forms under test are there (the arms, Solo12, the chains)
+}
+
+// The forms the robots' joints get once X_tree's few-ulp entries are snapped (Model::finalize):
+// the joint axis onto the parent's y on UR5's shoulder_lift, wrist_2 and wrist_3 and on the
+// Panda's joints 2-7; UR5's base, elbow and wrist_1 joints turn about z.
+TEST(Dynamics, RobotJointsGetTheirForms) {
+  auto forms = [](const std::string& file) {
+    const Model m = model_from_urdf_file(se3_test::robot_path(file), UrdfOptions());
+    std::string f;
+    for (int i = 1; i <= m.n; ++i) {
+      f += m.joints[i].z_rotation      ? 'z'
+           : m.joints[i].axis_row >= 0 ? char('0' + m.joints[i].axis_row)
+                                       : '-';
+    }
+    return f;
+  };
+  EXPECT_EQ(forms("ur5_robot.urdf"), "z1zz11");
+  EXPECT_EQ(forms("panda.urdf").substr(0, 7), "z111111");
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -47,8 +47,14 @@ struct JointModel {
   int idx_v = 0;  ///< first of them in v (Model::finalize sets it)
   /// X_tree's rotation turns about z only, R = [Q 0; 0 1] with exact zeros and one (the identity
   /// among them): then so does X_tree exp(S q), and the recursions transform by its 2x2 block Q
-  /// (src/dynamics/joint.h). Model::finalize sets it from X_tree; nothing is rounded to get it.
+  /// (src/dynamics/joint.h). Model::finalize sets it from X_tree, after snapping the rotation's
+  /// entries within 4 ulp of 0 or +-1 onto them.
   bool z_rotation = false;
+  /// k when X_tree's rotation maps the joint's z axis exactly onto the parent's axis +-e_k
+  /// (R(k, 0) = R(k, 1) = 0, R(k, 2) = +-1, R(r, 2) = 0 for r != k) and the joint is not a
+  /// z_rotation; else -1. Then so does X_tree exp(S q), and its rotations skip those entries
+  /// (src/dynamics/joint.h). Model::finalize sets it.
+  signed char axis_row = -1;
   /// The components of X_tree's offset p that are nonzero, bit k for p[k] (7: all): a revolute
   /// joint's cross products with p skip the others (src/dynamics/joint.h). Model::finalize sets it.
   unsigned char offset_axes = 7;

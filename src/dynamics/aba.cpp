@@ -12,6 +12,7 @@
 // row and column and B's third row zero: the transform into the parent's frame works on the
 // 15 entries left.
 #include <cmath>
+#include <type_traits>
 
 #include "joint.h"
 #include "se3_sim/dynamics.h"
@@ -72,9 +73,11 @@ SE3_KERNEL void add_shifted(const Vec3& pv, const double (&Ap)[3][3], const doub
 // w = a01 r0 + a11 r1), B' = R B R^T = r0 (R b0)^T + r1 (R b1)^T (b_k the rows of B),
 // C' = R C R^T; then the shift (add_shifted).
 //
-// ZR (f.R = [Q 0; 0 1]): r0 = (Q00, Q10, 0), r1 = (Q01, Q11, 0), r2 = e_3, so A' and B' keep
-// a zero third row (and A' a zero third column) and only Q enters the products.
-template <bool ZR, int PM>
+// F = kZ (f.R = [Q 0; 0 1]): r0 = (Q00, Q10, 0), r1 = (Q01, Q11, 0), r2 = e_3, so A' and B'
+// keep a zero third row (and A' a zero third column) and only Q enters the products. F =
+// kAxisRow + k: r0 and r1 have a zero component k and r2 = +-e_k, so A' and B' have a zero row k
+// (A' a zero column k too), and the products skip R's zeros (detail::dot3).
+template <int F, int PM>
 SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
                                 const Vec6& pA, const Vec6& c, Mat6& IAp) {
   const double* m = IA.data();  // m[r + 6 c], r <= c
@@ -106,7 +109,7 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
   // (38): the rotation.
   const double* R = f.R.data();  // column-major: R(r, k) = R[r + 3 k]
   double Ap[3][3], Bp[3][3], Cp[3][3], Z[3][3], y0[3], y1[3], uu[3], ww[3];
-  if constexpr (ZR) {
+  if constexpr (F == detail::kZ) {
     const double q00 = R[0], q10 = R[1], q01 = R[3], q11 = R[4];
 #pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {  // Z = R C: rows 0, 1 mixed by Q, row 2 kept
@@ -137,27 +140,46 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
     add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
     return pa;
   }
+  using detail::axis_row_of;
+  using detail::dot3;
+  using I0 = std::integral_constant<int, 0>;
+  using I1 = std::integral_constant<int, 1>;
+  using I2 = std::integral_constant<int, 2>;
+  auto rows = [&](auto rr) SE3_LAMBDA {  // Z = R C, y_k = R b_k, u, w: row r
+    constexpr int r = decltype(rr)::value;
 #pragma GCC unroll 3
-  for (int r = 0; r < 3; ++r) {
-    const double R0 = R[r], R1 = R[r + 3], R2 = R[r + 6];
-#pragma GCC unroll 3
-    for (int j = 0; j < 3; ++j) Z[r][j] = R0 * C[0][j] + R1 * C[1][j] + R2 * C[2][j];
-    y0[r] = R0 * B[0][0] + R1 * B[0][1] + R2 * B[0][2];
-    y1[r] = R0 * B[1][0] + R1 * B[1][1] + R2 * B[1][2];
-    uu[r] = a00 * R0 + a01 * R1;
-    ww[r] = a01 * R0 + a11 * R1;
-  }
-#pragma GCC unroll 3
-  for (int i = 0; i < 3; ++i) {
-#pragma GCC unroll 3
-    for (int j = 0; j < 3; ++j) {
+    for (int j = 0; j < 3; ++j) Z[r][j] = dot3<F, true, r>(R, C[0][j], C[1][j], C[2][j]);
+    y0[r] = dot3<F, true, r>(R, B[0][0], B[0][1], B[0][2]);
+    y1[r] = dot3<F, true, r>(R, B[1][0], B[1][1], B[1][2]);
+    if constexpr (axis_row_of(F, r)) {
+      uu[r] = ww[r] = 0;
+    } else {
+      const double R0 = R[r], R1 = R[r + 3];
+      uu[r] = a00 * R0 + a01 * R1;
+      ww[r] = a01 * R0 + a11 * R1;
+    }
+  };
+  rows(I0()), rows(I1()), rows(I2());
+  auto entries = [&](auto ii, auto jj) SE3_LAMBDA {  // B'(i, j), and C'(i, j), A'(i, j) for j >= i
+    constexpr int i = decltype(ii)::value, j = decltype(jj)::value;
+    if constexpr (axis_row_of(F, i)) {
+      Bp[i][j] = 0;
+    } else {
       Bp[i][j] = R[i] * y0[j] + R[i + 3] * y1[j];
-      if (j >= i) {
-        Cp[i][j] = Cp[j][i] = Z[i][0] * R[j] + Z[i][1] * R[j + 3] + Z[i][2] * R[j + 6];
+    }
+    if constexpr (j >= i) {
+      Cp[i][j] = dot3<F, true, j>(R, Z[i][0], Z[i][1], Z[i][2]);
+      if constexpr (j > i) Cp[j][i] = Cp[i][j];
+      if constexpr (axis_row_of(F, i) || axis_row_of(F, j)) {
+        Ap[i][j] = 0;
+      } else {
         Ap[i][j] = uu[i] * R[j] + ww[i] * R[j + 3];
       }
     }
-  }
+  };
+  auto row_entries = [&](auto ii)
+                         SE3_LAMBDA { entries(ii, I0()), entries(ii, I1()), entries(ii, I2()); };
+  row_entries(I0()), row_entries(I1()), row_entries(I2());
   add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
   return pa;
 }
@@ -239,7 +261,7 @@ SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, doub
   constexpr int k = J::axis;
   Vec6 pa;
   if constexpr (k == 2) {
-    pa = inward_revolute<J::z_rotation, J::offset>(f, IA, U, Dinv, u, pA, c, IAp);
+    pa = inward_revolute<J::form, J::offset>(f, IA, U, Dinv, u, pA, c, IAp);
   } else {
     double ia[6][6];
     const Vec6 Ud = U * Dinv;
@@ -253,7 +275,7 @@ SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, doub
     }
     add_transformed_inertia(f, ia, IAp);
   }
-  detail::add_force<J::z_rotation, J::offset>(f, pa.data(), pAp.data());
+  detail::add_force<J::form, J::offset>(f, pa.data(), pAp.data());
 }
 
 }  // namespace
@@ -335,10 +357,10 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
       double Ua;
       if (model.parent[i] == 0 && !model.floating) {  // a = [0; R^T ag] (gamma = 0)
         a[0] = a[1] = a[2] = 0;
-        detail::rotate_back<J.z_rotation>(data.Xup[i].R.data(), ag[3], ag[4], ag[5], a + 3);
+        detail::rotate_back<J.form>(data.Xup[i].R.data(), ag[3], ag[4], ag[5], a + 3);
         Ua = U[3] * a[3] + U[4] * a[4] + U[5] * a[5];
       } else {
-        detail::inv_motion<J.z_rotation, J.offset>(data.Xup[i], data.A[model.parent[i]].data(), a);
+        detail::inv_motion<J.form, J.offset>(data.Xup[i], data.A[model.parent[i]].data(), a);
         const double* c = data.c[i].data();
         Ua = 0;
         for (int r = 0; r < 6; ++r) {

@@ -97,7 +97,7 @@ SE3_NOINLINE void wrench_components_to_parent(const JointModel& jm, int kp, cons
       for (int c = col; c < end; ++c) {
         double x[6];
         for (int r = 0; r < 6; ++r) x[r] = F[r][c];
-        F[k][c] = detail::force_to_parent_component<J.z_rotation, J.offset, k>(R, t, x);
+        F[k][c] = detail::force_to_parent_component<J.form, J.offset, k>(R, t, x);
       }
     };
     if (kp == 2) {
@@ -151,7 +151,7 @@ const MatX& crba_local(const Model& model, Data& data, const VecX& q) {
       for (int c = col; c < end; ++c) {
         double x[6];
         for (int r = 0; r < 6; ++r) x[r] = F[r][c];
-        detail::force_to_parent<J.z_rotation, J.offset>(R, t, x);
+        detail::force_to_parent<J.form, J.offset>(R, t, x);
         for (int r = 0; r < 6; ++r) F[r][c] = x[r];
       }
     });

@@ -7,14 +7,17 @@
 //
 // A joint whose X_tree turns about z only (JointModel::z_rotation: R = [Q 0; 0 1] exactly, e.g.
 // the identity: the first joint of the arms, Solo12's knees) keeps that form in X_tree exp(S q),
-// and its kernels transform by the 2x2 block Q: 4 multiplies per 3-vector instead of 9. They
+// and its kernels transform by the 2x2 block Q: 4 multiplies per 3-vector instead of 9. A joint
+// whose X_tree maps its z axis exactly onto a parent axis +-e_k (JointModel::axis_row = k: the
+// quarter turns of the arms' wrists and Solo12's hips) keeps that too, with 5 multiplies. They
 // compute the same sums as the general kernels less the products with the exact zeros, so the
-// results are the same numbers. Likewise a revolute joint's offset p (Xup's is X_tree's) has
-// components that are exactly zero on most robots (JointModel::offset_axes): its cross products
-// p x . then skip them.
+// results are the same numbers (the forms kZ and kAxisRow, nonzero() and dot3() below). Likewise a
+// revolute joint's offset p (Xup's is X_tree's) has components that are exactly zero on most robots
+// (JointModel::offset_axes): its cross products p x . then skip them.
 #pragma once
 
 #include <cmath>
+#include <type_traits>
 
 #include "se3_sim/dynamics.h"
 
@@ -38,18 +41,72 @@
 namespace se3 {
 namespace detail {
 
+/// The joint forms: what the kernels may assume of the rotation R of X_tree, and so of
+/// X_tree exp(S q) (whose first two columns mix X_tree's, the third kept). kGeneral: nothing;
+/// kZ (JointModel::z_rotation): R = [Q 0; 0 1] exactly, whose 1 they need not multiply by;
+/// kAxisRow + k (JointModel::axis_row): row k = (0, 0, +-1) and column 2 = +-e_k exactly.
+/// Written against the pattern, a kernel computes the general kernel's sums less the products
+/// with the exact zeros (and the exact one of kZ), in the same order: the same numbers.
+constexpr int kGeneral = 0, kZ = 1, kAxisRow = 2;
+/// May R(r, c) be nonzero in form F?
+constexpr bool nonzero(int F, int r, int c) {
+  return F == kGeneral || (F == kZ ? (r < 2) == (c < 2) : (r == F - kAxisRow) == (c == 2));
+}
+/// Row r of R is zero in columns 0 and 1 (r is where form F sends the joint axis).
+constexpr bool axis_row_of(int F, int r) {
+  return (F == kZ && r == 2) || (F >= kAxisRow && r == F - kAxisRow);
+}
+
+/// Row i of R (Row) or its column i, times (x0, x1, x2), without the products form F makes zero
+/// (or one).
+template <int F, bool Row, int i>
+SE3_KERNEL double dot3(const double* R, double x0, double x1, double x2) {
+  constexpr bool n0 = Row ? nonzero(F, i, 0) : nonzero(F, 0, i);
+  constexpr bool n1 = Row ? nonzero(F, i, 1) : nonzero(F, 1, i);
+  constexpr bool n2 = Row ? nonzero(F, i, 2) : nonzero(F, 2, i);
+  constexpr int e0 = Row ? i : 3 * i, e1 = Row ? i + 3 : 3 * i + 1, e2 = Row ? i + 6 : 3 * i + 2;
+  if constexpr (n0 && n1 && n2) {
+    return R[e0] * x0 + R[e1] * x1 + R[e2] * x2;
+  } else if constexpr (n0 && n1) {
+    return R[e0] * x0 + R[e1] * x1;
+  } else if constexpr (n0 && n2) {
+    return R[e0] * x0 + R[e2] * x2;
+  } else if constexpr (n1 && n2) {
+    return R[e1] * x1 + R[e2] * x2;
+  } else if constexpr (n2) {
+    if constexpr (F == kZ) {
+      return x2;  // R(2, 2) = 1
+    } else {
+      return R[e2] * x2;
+    }
+  } else if constexpr (n1) {
+    return R[e1] * x1;
+  } else if constexpr (n0) {
+    return R[e0] * x0;
+  } else {
+    return 0.0;
+  }
+}
+
 /// X_tree * exp(S q) of a revolute joint, given c = cos q and s = sin q: the parent-from-body
-/// displacement f_{i,j} = KK_j exp(S_j q_j) (eq. 26). Rz(q) turns the first two columns.
-template <bool Z = false>
+/// displacement f_{i,j} = KK_j exp(S_j q_j) (eq. 26). Rz(q) turns the first two columns; the
+/// row form F makes zero in them stays zero (copied from X_tree).
+template <int F = kGeneral>
 SE3_KERNEL void revolute_transform(const SE3& Xt, double c, double s, SE3& out) {
   const double* a = Xt.R.data();  // column-major
   double* r = out.R.data();
-  constexpr int rows = Z ? 2 : 3;  // Z: a[2] = a[5] = 0, so r[2] = r[5] = 0 as in X_tree
-  for (int k = 0; k < rows; ++k) {
-    r[k] = c * a[k] + s * a[3 + k];
-    r[3 + k] = c * a[3 + k] - s * a[k];
-  }
-  if constexpr (Z) r[2] = a[2], r[5] = a[5];
+  auto row = [&](auto kk) SE3_LAMBDA {
+    constexpr int k = decltype(kk)::value;
+    if constexpr (axis_row_of(F, k)) {
+      r[k] = a[k], r[3 + k] = a[3 + k];
+    } else {
+      r[k] = c * a[k] + s * a[3 + k];
+      r[3 + k] = c * a[3 + k] - s * a[k];
+    }
+  };
+  row(std::integral_constant<int, 0>());
+  row(std::integral_constant<int, 1>());
+  row(std::integral_constant<int, 2>());
   for (int k = 0; k < 3; ++k) r[6 + k] = a[6 + k];
   out.p = Xt.p;
 }
@@ -61,22 +118,25 @@ SE3_KERNEL void prismatic_transform(const SE3& Xt, double q, SE3& out) {
 }
 
 /// A one-dof joint whose motion subspace is S = e_K (K = 2: rotation about z, K = 5: translation
-/// along z); Z: its X_tree turns about z only (JointModel::z_rotation).
+/// along z); F: its X_tree's form (kGeneral, kZ: JointModel::z_rotation, kAxisRow + k:
+/// JointModel::axis_row = k; a prismatic joint has kGeneral or kZ).
 /// PM: the components of Xup's offset that may be nonzero (bit k for p[k]; 7 for a prismatic
 /// joint, whose offset moves with q).
-template <int K, bool Z = false, int PM = 7>
+template <int K, int F = kGeneral, int PM = 7>
 struct AxisJoint {
   static_assert(K == 2 || K == 5, "joints turn about or slide along the body's z axis");
   static_assert(K == 2 || PM == 7, "a prismatic joint's offset moves with q");
+  static_assert(K == 2 || F <= kZ, "a prismatic joint has the general or the z form");
   static constexpr int axis = K;
-  static constexpr bool z_rotation = Z;
+  static constexpr int form = F;
+  static constexpr bool z_rotation = F == kZ;
   static constexpr int offset = PM;
 
   /// out = X_tree exp(S q); c = cos q and s = sin q (read by the revolute joint only).
   SE3_KERNEL static void transform(const SE3& Xt, double q, double c, double s, SE3& out) {
     if constexpr (K == 2) {
       (void)q;
-      revolute_transform<Z>(Xt, c, s, out);
+      revolute_transform<F>(Xt, c, s, out);
     } else {
       (void)c, (void)s;
       prismatic_transform(Xt, q, out);
@@ -130,77 +190,88 @@ struct AxisJoint {
 using RevoluteZ = AxisJoint<2>;
 using PrismaticZ = AxisJoint<5>;
 
-template <bool Z, class F>
+template <int Form, class F>
 SE3_KERNEL decltype(auto) with_revolute(int offset_axes, F&& f) {
   switch (offset_axes) {
     case 0:
-      return f(AxisJoint<2, Z, 0>());
+      return f(AxisJoint<2, Form, 0>());
     case 1:
-      return f(AxisJoint<2, Z, 1>());
+      return f(AxisJoint<2, Form, 1>());
     case 2:
-      return f(AxisJoint<2, Z, 2>());
+      return f(AxisJoint<2, Form, 2>());
     case 3:
-      return f(AxisJoint<2, Z, 3>());
+      return f(AxisJoint<2, Form, 3>());
     case 4:
-      return f(AxisJoint<2, Z, 4>());
+      return f(AxisJoint<2, Form, 4>());
     case 5:
-      return f(AxisJoint<2, Z, 5>());
+      return f(AxisJoint<2, Form, 5>());
     case 6:
-      return f(AxisJoint<2, Z, 6>());
+      return f(AxisJoint<2, Form, 6>());
     default:
-      return f(AxisJoint<2, Z, 7>());
+      return f(AxisJoint<2, Form, 7>());
   }
 }
 
-/// f(AxisJoint<K, Z, PM>()) for the joint of a moving body (Model::validate admits no other joint
-/// on bodies 1..n): K from its type, Z its z_rotation, PM its offset_axes (revolute).
+/// f(AxisJoint<K, F, PM>()) for the joint of a moving body (Model::validate admits no other joint
+/// on bodies 1..n): K from its type, F its form (z_rotation, axis_row), PM its offset_axes
+/// (revolute).
 template <class F>
 SE3_KERNEL decltype(auto) with_joint(const JointModel& j, F&& f) {
   if (j.type == JointType::Revolute) {
-    if (j.z_rotation) return with_revolute<true>(j.offset_axes, f);
-    return with_revolute<false>(j.offset_axes, f);
+    if (j.z_rotation) return with_revolute<kZ>(j.offset_axes, f);
+    switch (j.axis_row) {
+      case 0:
+        return with_revolute<kAxisRow>(j.offset_axes, f);
+      case 1:
+        return with_revolute<kAxisRow + 1>(j.offset_axes, f);
+      case 2:
+        return with_revolute<kAxisRow + 2>(j.offset_axes, f);
+      default:
+        return with_revolute<kGeneral>(j.offset_axes, f);
+    }
   }
-  if (j.z_rotation) return f(AxisJoint<5, true>());
-  return f(AxisJoint<5, false>());
+  if (j.z_rotation) return f(AxisJoint<5, kZ>());
+  return f(AxisJoint<5, kGeneral>());
 }
 
-/// with_joint for steps that read no offset (AxisJoint<K, Z>, PM = 7): fewer copies of them.
+/// with_joint for steps that read no offset (AxisJoint<K, F>, PM = 7): fewer copies of them.
 template <class F>
 SE3_KERNEL decltype(auto) with_joint_form(const JointModel& j, F&& f) {
   if (j.type == JointType::Revolute) {
-    if (j.z_rotation) return f(AxisJoint<2, true>());
-    return f(AxisJoint<2, false>());
+    if (j.z_rotation) return f(AxisJoint<2, kZ>());
+    switch (j.axis_row) {
+      case 0:
+        return f(AxisJoint<2, kAxisRow>());
+      case 1:
+        return f(AxisJoint<2, kAxisRow + 1>());
+      case 2:
+        return f(AxisJoint<2, kAxisRow + 2>());
+      default:
+        return f(AxisJoint<2, kGeneral>());
+    }
   }
-  if (j.z_rotation) return f(AxisJoint<5, true>());
-  return f(AxisJoint<5, false>());
+  if (j.z_rotation) return f(AxisJoint<5, kZ>());
+  return f(AxisJoint<5, kGeneral>());
 }
 
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
 /// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
 void joint_transforms(const Model& model, Data& data, const VecX& q);
 
-/// y = R^T x for a column-major R; Z: R = [Q 0; 0 1] (4 multiplies).
-template <bool Z = false>
+/// y = R^T x for a column-major R of form F (9 multiplies; kZ 4, kAxisRow + k 5).
+template <int F = kGeneral>
 SE3_KERNEL void rotate_back(const double* R, double x0, double x1, double x2, double* y) {
-  if constexpr (Z) {
-    y[0] = R[0] * x0 + R[1] * x1;
-    y[1] = R[3] * x0 + R[4] * x1;
-    y[2] = x2;
-  } else {
-    for (int j = 0; j < 3; ++j) y[j] = R[3 * j] * x0 + R[3 * j + 1] * x1 + R[3 * j + 2] * x2;
-  }
+  y[0] = dot3<F, false, 0>(R, x0, x1, x2);
+  y[1] = dot3<F, false, 1>(R, x0, x1, x2);
+  y[2] = dot3<F, false, 2>(R, x0, x1, x2);
 }
 
-/// y = R x for a column-major R; Z: R = [Q 0; 0 1] (4 multiplies).
-template <bool Z = false>
+/// y = R x for a column-major R of form F (9 multiplies; kZ 4, kAxisRow + k 5).
+template <int F = kGeneral>
 SE3_KERNEL void rotate(const double* R, double x0, double x1, double x2, double* y) {
-  if constexpr (Z) {
-    y[0] = R[0] * x0 + R[3] * x1;
-    y[1] = R[1] * x0 + R[4] * x1;
-    y[2] = x2;
-  } else {
-    for (int r = 0; r < 3; ++r) y[r] = R[r] * x0 + R[r + 3] * x1 + R[r + 6] * x2;
-  }
+  y[0] = dot3<F, true, 0>(R, x0, x1, x2);
+  y[1] = dot3<F, true, 1>(R, x0, x1, x2);
+  y[2] = dot3<F, true, 2>(R, x0, x1, x2);
 }
 
 /// Component r of p x x, p[i] x[j] - p[j] x[i] for (i, j) = (r + 1, r + 2) mod 3, where only the
@@ -252,8 +323,8 @@ SE3_KERNEL double plus_cross(double a, const double* p, const double* x) {
 }
 
 /// out = Ad_{f^-1} in for a twist (eq. 33's transform): (R^T w, R^T (v - p x w)). out != in.
-/// Z: f.R = [Q 0; 0 1]; PM: the components of f.p that may be nonzero.
-template <bool Z = false, int PM = 7>
+/// F: f.R's form; PM: the components of f.p that may be nonzero.
+template <int F = kGeneral, int PM = 7>
 SE3_KERNEL void inv_motion(const SE3& f, const double* in, double* out) {
   const double* R = f.R.data();  // column-major
   const double* p = f.p.data();
@@ -261,24 +332,24 @@ SE3_KERNEL void inv_motion(const SE3& f, const double* in, double* out) {
   const double t0 = minus_cross<PM, 0>(in[3], p, w);
   const double t1 = minus_cross<PM, 1>(in[4], p, w);
   const double t2 = minus_cross<PM, 2>(in[5], p, w);
-  rotate_back<Z>(R, w[0], w[1], w[2], out);
-  rotate_back<Z>(R, t0, t1, t2, out + 3);
+  rotate_back<F>(R, w[0], w[1], w[2], out);
+  rotate_back<F>(R, t0, t1, t2, out + 3);
 }
 
 /// The twist recursion of eq. (33) for one body: V = Ad_{Xup^-1} V_parent + S qd.
 template <class J>
 SE3_KERNEL void child_twist(J, const SE3& Xup, const double* Vp, double qd, double* V) {
-  inv_motion<J::z_rotation, J::offset>(Xup, Vp, V);
+  inv_motion<J::form, J::offset>(Xup, Vp, V);
   V[J::axis] += qd;
 }
 
 /// x <- Ad*_{f^-1} x for wrenches x = (n0, n1, n2, f0, f1, f2) given by R, p of f (eq. 19:
-/// (R n + p x R f, R f)). Z: R = [Q 0; 0 1]; PM: the components of p that may be nonzero.
-template <bool Z = false, int PM = 7>
+/// (R n + p x R f, R f)). F: R's form; PM: the components of p that may be nonzero.
+template <int F = kGeneral, int PM = 7>
 SE3_KERNEL void force_to_parent(const double* R, const double* p, double (&x)[6]) {
   double f[3], n[3];
-  rotate<Z>(R, x[3], x[4], x[5], f);
-  rotate<Z>(R, x[0], x[1], x[2], n);
+  rotate<F>(R, x[3], x[4], x[5], f);
+  rotate<F>(R, x[0], x[1], x[2], n);
   x[0] = plus_cross<PM, 0>(n[0], p, f);
   x[1] = plus_cross<PM, 1>(n[1], p, f);
   x[2] = plus_cross<PM, 2>(n[2], p, f);
@@ -287,25 +358,25 @@ SE3_KERNEL void force_to_parent(const double* R, const double* p, double (&x)[6]
 
 /// Component K of force_to_parent's result (K = 2: the torque's z, 5: the force's z), the same
 /// sums without the other components.
-template <bool Z, int PM, int K>
+template <int F, int PM, int K>
 SE3_KERNEL double force_to_parent_component(const double* R, const double* p,
                                             const double (&x)[6]) {
   if constexpr (K == 5) {
-    return Z ? x[5] : R[2] * x[3] + R[5] * x[4] + R[8] * x[5];
+    return dot3<F, true, 2>(R, x[3], x[4], x[5]);
   } else {
     static_assert(K == 2, "a joint axis is component 2 or 5");
     double f[3];
-    rotate<Z>(R, x[3], x[4], x[5], f);
-    const double n2 = Z ? x[2] : R[2] * x[0] + R[5] * x[1] + R[8] * x[2];
+    rotate<F>(R, x[3], x[4], x[5], f);
+    const double n2 = dot3<F, true, 2>(R, x[0], x[1], x[2]);
     return plus_cross<PM, 2>(n2, p, f);
   }
 }
 
-/// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f). Z, PM: force_to_parent's.
-template <bool Z = false, int PM = 7>
+/// out += Ad*_{f^-1} in for a wrench (eq. 19): (R n + p x R f, R f). F, PM: force_to_parent's.
+template <int F = kGeneral, int PM = 7>
 SE3_KERNEL void add_force(const SE3& f, const double* in, double* out) {
   double x[6] = {in[0], in[1], in[2], in[3], in[4], in[5]};
-  force_to_parent<Z, PM>(f.R.data(), f.p.data(), x);
+  force_to_parent<F, PM>(f.R.data(), f.p.data(), x);
   for (int r = 0; r < 6; ++r) out[r] += x[r];
 }
 

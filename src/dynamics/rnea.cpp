@@ -48,7 +48,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
         for (int r = 0; r < 6; ++r) V[r] = 0;
         V[k] = qd;
         A[0] = A[1] = A[2] = 0;
-        detail::rotate_back<J.z_rotation>(X.R.data(), ag[0], ag[1], ag[2], A + 3);
+        detail::rotate_back<J.form>(X.R.data(), ag[0], ag[1], ag[2], A + 3);
         A[k] += qdd;
         // (36): F = J A + V x* (J V), J V = qd J S.
         detail::inertia_times(I, A, F);
@@ -62,7 +62,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
       }
       // (33), (34), (35): V = Ad^-1 V_p + S qd, A = Ad^-1 A_p + V x S qd + S qdd.
       detail::child_twist(J, X, data.V[p].data(), qd, V);
-      detail::inv_motion<J.z_rotation, J.offset>(X, data.A[p].data(), A);
+      detail::inv_motion<J.form, J.offset>(X, data.A[p].data(), A);
       J.add_bias_acceleration(V, qd, A);
       A[k] += qdd;
       // (36), own-body term: F = J A - ad*_V (J V).
@@ -75,7 +75,7 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     const int p = model.parent[i];
     if (p > 0 || model.floating) {
       detail::with_joint_form(jm, [&](auto J) SE3_LAMBDA {  // eq. (36)
-        detail::add_force<J.z_rotation, J.offset>(data.Xup[i], data.F[i].data(), data.F[p].data());
+        detail::add_force<J.form, J.offset>(data.Xup[i], data.F[i].data(), data.F[p].data());
       });
     }
   }

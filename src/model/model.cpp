@@ -12,6 +12,31 @@ namespace {
 bool is_z_rotation(const Mat3& R) {
   return R(2, 0) == 0 && R(2, 1) == 0 && R(0, 2) == 0 && R(1, 2) == 0 && R(2, 2) == 1;
 }
+// k when R maps e_3 exactly onto +-e_k with row k = (0, 0, +-1), for a rotation that is not a
+// z rotation; else -1.
+signed char axis_row(const Mat3& R) {
+  if (is_z_rotation(R)) return -1;
+  for (int k = 0; k < 3; ++k) {
+    bool ok = R(k, 0) == 0 && R(k, 1) == 0 && (R(k, 2) == 1 || R(k, 2) == -1);
+    for (int r = 0; r < 3; ++r) ok = ok && (r == k || R(r, 2) == 0);
+    if (ok) return static_cast<signed char>(k);
+  }
+  return -1;
+}
+// Entries within 4 ulp of 0 or +-1 become exactly that (cos(pi/2) = 6e-17, products of such
+// turns 1e-27, 1 - 2e-16): the joint forms above see the structure the URDF meant, and the
+// rotation moves by less than its own rounding. 1.57079632679 in a file is 4.9e-12 off, and
+// stays so.
+void snap_rotation(Mat3& R) {
+  constexpr double tol = 4 * std::numeric_limits<double>::epsilon();
+  for (int k = 0; k < 9; ++k) {
+    double& x = R.data()[k];
+    if (std::abs(x) <= tol)
+      x = 0;
+    else if (std::abs(std::abs(x) - 1) <= tol)
+      x = x > 0 ? 1 : -1;
+  }
+}
 // Bit k set for p[k] != 0 (NaN counts as nonzero).
 unsigned char offset_axes(const Vec3& p) {
   return static_cast<unsigned char>((p[0] != 0 ? 1 : 0) | (p[1] != 0 ? 2 : 0) |
@@ -104,7 +129,9 @@ void Model::finalize() {
     nv += j.nv;
   }
   for (int i = 1; i <= n && i < static_cast<int>(X_tree.size()); ++i) {
+    snap_rotation(X_tree[i].R);
     joints[i].z_rotation = is_z_rotation(X_tree[i].R);
+    joints[i].axis_row = axis_row(X_tree[i].R);
     joints[i].offset_axes = offset_axes(X_tree[i].p);
   }
   children.assign(n + 1, {});
@@ -172,8 +199,9 @@ void Model::validate() const {
     }
     if (j.idx_q != nq_sum || j.idx_v != nv_sum || JointModel(j.type).nq != j.nq ||
         JointModel(j.type).nv != j.nv ||
-        (i > 0 && (j.z_rotation != is_z_rotation(X_tree[i].R) ||
-                   j.offset_axes != offset_axes(X_tree[i].p)))) {
+        (i > 0 &&
+         (j.z_rotation != is_z_rotation(X_tree[i].R) || j.axis_row != axis_row(X_tree[i].R) ||
+          j.offset_axes != offset_axes(X_tree[i].p)))) {
       throw ModelError("model '" + name + "': joint coordinates out of order (finalize())");
     }
     nq_sum += j.nq;
