@@ -207,6 +207,7 @@ class TextLimits {
       switch (c) {
         case '[':
         case '{':
+          if (flow_ == 0 && !node_start) break;  // inside a block plain scalar: its text
           item();
           if (flow_ == 0) flow_base_ = depth;
           ++flow_;
