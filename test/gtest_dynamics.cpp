@@ -634,8 +634,9 @@ TEST(Dynamics, WrenchComponentToParentEqualsTheFullTransform) {
 }
 
 // The joint forms (detail::kZ, detail::kAxisRow + k) skip only products with exact zeros (and
-// kZ's exact one), in the general kernels' order: on every robot and chain, ABA, RNEA and CRBA
-// give the same numbers as with every joint in the general form.
+// kZ's exact one), in the general kernels' order: on every robot and chain, ABA, RNEA, CRBA and
+// forward kinematics give the same numbers as with every joint in the general form (whose
+// kinematics is the plain SE3 product).
 TEST(Dynamics, JointFormsGiveTheGeneralFormsNumbers) {
   int row_forms = 0;
   for (const Case& c : cases()) {
@@ -659,6 +660,18 @@ TEST(Dynamics, JointFormsGiveTheGeneralFormsNumbers) {
       const MatX M = crba(c.model, d, s.base, s.q);
       const MatX M_g = crba(general, dg, s.base, s.q);
       ASSERT_TRUE((M.array() == M_g.array()).all()) << "crba";
+      forward_kinematics(c.model, d, s.base, s.q);
+      forward_kinematics(general, dg, s.base, s.q);
+      for (int i = 1; i <= c.model.n; ++i) {
+        ASSERT_TRUE((d.oMb[i].R.array() == dg.oMb[i].R.array()).all()) << "fk " << i;
+        ASSERT_TRUE((d.oMb[i].p.array() == dg.oMb[i].p.array()).all()) << "fk " << i;
+        // and the general form is the plain product, but for the order of Eigen's sums (a few
+        // ulp of entries of size 1, of the position's size)
+        const SE3 f = dg.oMb[c.model.parent[i]] * dg.Xup[i];
+        ASSERT_LT((f.R - dg.oMb[i].R).cwiseAbs().maxCoeff(), 1e-15) << "fk product " << i;
+        ASSERT_LT((f.p - dg.oMb[i].p).cwiseAbs().maxCoeff(), 1e-15 * (1 + f.p.norm()))
+            << "fk product " << i;
+      }
     }
   }
   EXPECT_GT(row_forms, 20);  // the forms under test are there (the arms, Solo12, the chains)

@@ -254,6 +254,36 @@ SE3_KERNEL decltype(auto) with_joint_form(const JointModel& j, F&& f) {
   return f(AxisJoint<5, kGeneral>());
 }
 
+/// out = a b for b = Xup of a joint J (forward kinematics' oMb[parent] Xup[i]): column c of
+/// out's rotation sums a.R's columns k over the entries b.R(k, c) that J's form may make
+/// nonzero, and out.p = a.R b.p + a.p over the components of b.p that J's offset may make
+/// nonzero (12 to 15 multiplies for the rotation instead of 27).
+template <class J>
+SE3_KERNEL void compose(J, const SE3& a, const SE3& b, SE3& out) {
+  constexpr int F = J::form, PM = J::offset;
+  const double* A = a.R.data();  // column-major
+  const double* B = b.R.data();
+  double* O = out.R.data();
+  auto column = [&](auto cc) SE3_LAMBDA {
+    constexpr int c = decltype(cc)::value;
+#pragma GCC unroll 3
+    for (int r = 0; r < 3; ++r) O[r + 3 * c] = dot3<F, false, c>(B, A[r], A[r + 3], A[r + 6]);
+  };
+  column(std::integral_constant<int, 0>());
+  column(std::integral_constant<int, 1>());
+  column(std::integral_constant<int, 2>());
+  const double* bp = b.p.data();
+  constexpr bool p0 = PM & 1, p1 = PM & 2, p2 = PM & 4;
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    double x = 0;
+    if constexpr (p0) x = A[r] * bp[0];
+    if constexpr (p1) x = p0 ? x + A[r + 3] * bp[1] : A[r + 3] * bp[1];
+    if constexpr (p2) x = (p0 || p1) ? x + A[r + 6] * bp[2] : A[r + 6] * bp[2];
+    out.p[r] = (p0 || p1 || p2) ? x + a.p[r] : a.p[r];
+  }
+}
+
 /// Xup[i] = X_tree[i] exp(S_i q_i) for every body, the sines and cosines first in one batch
 /// (sin_q, cos_q). Every recursion starts here: the joints are independent of each other.
 void joint_transforms(const Model& model, Data& data, const VecX& q);

@@ -26,7 +26,9 @@ void forward_kinematics(const Model& model, Data& data, const SE3& base, const V
   detail::joint_transforms(model, data, q);
   data.oMb[0] = base;
   for (int i = 1; i <= model.n; ++i) {
-    data.oMb[i] = data.oMb[model.parent[i]] * data.Xup[i];
+    detail::with_joint(model.joints[i], [&](auto J) SE3_LAMBDA {
+      detail::compose(J, data.oMb[model.parent[i]], data.Xup[i], data.oMb[i]);
+    });
   }
 }
 
