@@ -3,7 +3,9 @@
 // random states (fixed seed), each call from the raw state.
 //
 //   callgrind_dynamics SUBJECT ALGO CALLS
-//   SUBJECT: ur5, panda7, solo12_free, chain200, chain200_free; ALGO: fk, rnea, aba, crba, minv
+//   SUBJECT: ur5, panda7, iiwa, pendulum, solo12, solo12_free, romeo_free, chainN, chainN_free (N
+//   links); ALGO: fk, rnea, aba, crba, minv, and minv_factor / minv_recursive (minv by the route
+//   named, whichever the model would choose)
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -28,12 +30,22 @@ Model load(const std::string& subject) {
     opt.locked = {{"panda_finger_joint1", 0}, {"panda_finger_joint2", 0}};
     return model_from_urdf_file(dir + "panda.urdf", opt);
   }
+  if (subject == "solo12") return model_from_urdf_file(dir + "solo12.urdf", opt);
   if (subject == "solo12_free") {
     opt.floating = true;
     return model_from_urdf_file(dir + "solo12.urdf", opt);
   }
-  if (subject == "chain200") return make_chain(200, false);
-  if (subject == "chain200_free") return make_chain(200, true);
+  if (subject == "iiwa") return model_from_urdf_file(dir + "kuka_iiwa.urdf", opt);
+  if (subject == "pendulum") return model_from_urdf_file(dir + "double_pendulum.urdf", opt);
+  if (subject == "romeo_free") {
+    opt.floating = true;
+    return model_from_urdf_file(dir + "romeo_small.urdf", opt);
+  }
+  if (subject.rfind("chain", 0) == 0) {
+    const bool free = subject.size() > 5 && subject.compare(subject.size() - 5, 5, "_free") == 0;
+    const int links = std::atoi(subject.c_str() + 5);
+    if (links > 0) return make_chain(links, free);
+  }
   std::fprintf(stderr, "unknown subject '%s'\n", subject.c_str());
   std::exit(2);
 }
@@ -42,13 +54,16 @@ Model load(const std::string& subject) {
 
 int main(int argc, char** argv) {
   if (argc != 4) {
-    std::fprintf(stderr, "usage: callgrind_dynamics SUBJECT fk|rnea|aba|crba|minv CALLS\n");
+    std::fprintf(
+        stderr,
+        "usage: callgrind_dynamics SUBJECT fk|rnea|aba|crba|minv[_factor|_recursive] CALLS\n");
     return 2;
   }
   const Model m = load(argv[1]);
   const std::string algo = argv[2];
   const int calls = std::atoi(argv[3]);
   Data d(m);
+  if (algo == "minv_factor" || algo == "minv_recursive") d.minv_by_factor = algo == "minv_factor";
   constexpr int kStates = 16;
   std::mt19937 gen(1);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -79,7 +94,7 @@ int main(int argc, char** argv) {
       sink += aba(m, d, base[k], q[k], v[k], x[k])[0];
     } else if (algo == "crba") {
       sink += crba(m, d, base[k], q[k])(0, 0);
-    } else if (algo == "minv") {
+    } else if (algo.rfind("minv", 0) == 0) {
       sink += minv(m, d, base[k], q[k])(0, 0);
     } else {
       std::fprintf(stderr, "unknown algorithm '%s'\n", algo.c_str());

@@ -4,6 +4,9 @@ callgrind), per robot:
 
     python3 scripts/callgrind_dynamics.py [--subjects ur5,panda7,...] [--algos fk,rnea,...]
 
+Subjects: ur5, panda7, iiwa, pendulum, solo12, solo12_free, romeo_free, chainN, chainN_free (N links).
+Algorithms: fk, rnea, aba, crba, minv (the model's route), minv_factor, minv_recursive.
+
 Runs the driver bench/callgrind_dynamics.cpp (built by scripts/build.sh) twice per case, with
 8 and 40 calls cycling over the same 16 random states, and prints the difference of the
 algorithm's inclusive instruction count divided by 32: what one call costs, with everything done
@@ -22,7 +25,8 @@ DRIVER = os.path.join(WS, "devel/lib/se3_sim/callgrind_dynamics")
 SUBJECTS = ["ur5", "panda7", "solo12_free", "chain200", "chain200_free"]
 ALGOS = ["fk", "rnea", "aba", "crba", "minv"]
 FUNCTION = {"fk": r"^se3::forward_kinematics\(", "rnea": r"^se3::rnea\(",
-            "aba": r"^se3::aba\(", "crba": r"^se3::crba\(", "minv": r"^se3::minv\("}
+            "aba": r"^se3::aba\(", "crba": r"^se3::crba\(", "minv": r"^se3::minv\(",
+            "minv_factor": r"^se3::minv\(", "minv_recursive": r"^se3::minv\("}
 
 
 def inclusive(out_file, pattern):

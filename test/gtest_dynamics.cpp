@@ -506,6 +506,64 @@ TEST(Dynamics, CrbaPicksItsEvaluationByDepth) {
   }
 }
 
+// minv's two routes (the recursion of eqs. 55-63 and the factorization of crba's D) on every
+// model: each equals D's Cholesky inverse to the conditioning's accuracy and the other route,
+// both are exactly symmetric, and the factor route's pivots are the recursion's 1 / (S^T IA S).
+TEST(Dynamics, MinvRoutesAgree) {
+  std::vector<Case> all = cases();
+  all.push_back({"chain8 {1e-2,1,1e2} fixed", make_chain(8, false, {1e-2, 1, 100})});
+  all.push_back({"chain4 {1e-2,1,1e2} floating", make_chain(4, true, {1e-2, 1, 100})});
+  double worst = 0;
+  for (const Case& c : all) {
+    const Model& m = c.model;
+    Data fac(m), rec(m);
+    fac.minv_by_factor = true;
+    rec.minv_by_factor = false;
+    std::mt19937_64 rng(110);
+    for (int k = 0; k < kStates; ++k) {
+      const RandomState s = se3_test::random_state(m, rng);
+      const MatX D = crba(m, rec, s.base, s.q);
+      const MatX Dl = D.llt().solve(MatX::Identity(m.nv, m.nv));
+      const Eigen::JacobiSVD<MatX> svd(D);
+      const double cond = svd.singularValues()(0) / svd.singularValues()(m.nv - 1);
+      const double tol = std::max(1e-12, 1e-15 * 20 * cond);
+      const MatX Df = minv(m, fac, s.base, s.q);
+      const MatX Dr = minv(m, rec, s.base, s.q);
+      EXPECT_LE(rel_err(Df, Dl), tol) << c.label << " cond " << cond;
+      EXPECT_LE(rel_err(Dr, Dl), tol) << c.label << " cond " << cond;
+      EXPECT_LE(rel_err(Df, Dr), tol) << c.label << " cond " << cond;
+      worst = std::max(worst, rel_err(Df, Dr) / cond);
+      EXPECT_EQ(Df, Df.transpose()) << c.label;
+      EXPECT_EQ(Dr, Dr.transpose()) << c.label;
+      for (int i = m.nv_base(); i < m.nv; ++i) {
+        EXPECT_LE(std::abs(fac.Dinv[i] - rec.Dinv[i]), tol * std::abs(rec.Dinv[i]))
+            << c.label << " dof " << i;
+      }
+    }
+  }
+  std::printf("minv factor route vs recursion: %.3g x cond\n", worst);
+}
+
+// The default route is the cheaper one (docs/performance.md): the factorization for small
+// shallow trees (the arms, short chains), the recursion for the quadrupeds and long chains.
+TEST(Dynamics, MinvPicksItsRouteBySize) {
+  EXPECT_TRUE(Data(make_chain(2, false)).minv_by_factor);
+  EXPECT_TRUE(Data(make_chain(8, false)).minv_by_factor);
+  EXPECT_FALSE(Data(make_chain(10, false)).minv_by_factor);
+  EXPECT_TRUE(Data(make_chain(4, true)).minv_by_factor);
+  EXPECT_FALSE(Data(make_chain(6, true)).minv_by_factor);
+  EXPECT_FALSE(Data(make_chain(200, false)).minv_by_factor);
+  for (const Case& c : cases()) {
+    const bool arm = c.label.find("ur5") != std::string::npos ||
+                     c.label.find("panda") != std::string::npos ||
+                     c.label.find("iiwa") != std::string::npos;
+    if (arm && !c.model.floating) EXPECT_TRUE(Data(c.model).minv_by_factor) << c.label;
+    if (c.label.find("solo12") != std::string::npos && c.model.floating) {
+      EXPECT_FALSE(Data(c.model).minv_by_factor) << c.label;
+    }
+  }
+}
+
 // ABA's documented contract, which RKMK's stage poses rely on (rkmk.cpp, stage_pose): the base
 // pose enters only through its rotation (gravity's direction in the base frame), and not at all
 // without gravity. Bit-identical accelerations, fixed and free base.

@@ -36,8 +36,8 @@ struct Data {
   /// Body i in its parent's frame, X_tree[i] exp(S_i q_i): every algorithm (all start with the
   /// joint transforms); [0] is not written.
   std::vector<SE3> Xup;
-  /// Body i in the world: forward_kinematics, minv, crba's world-frame evaluation (crba_local
-  /// false), and the energy, momentum and centre-of-mass functions.
+  /// Body i in the world: forward_kinematics, minv's recursion, crba's world-frame evaluation
+  /// (crba_local false), and the energy, momentum and centre-of-mass functions.
   std::vector<SE3> oMb;
   /// Body twists (body frame), eq. (33): forward_kinematics with v, body_twists, rnea, aba,
   /// kinetic_energy, spatial_momentum ([0] the base's twist, zero for a fixed base).
@@ -51,8 +51,8 @@ struct Data {
   /// [0] the base's (minus f_ext_base); aba: the articulated bias forces pA, eqs. (39)-(41) (body
   /// frame).
   std::vector<Vec6> F;
-  /// aba: articulated-body inertias, eq. (38) (body frame; the upper triangle only); minv:
-  /// articulated inertias in the world frame (the upper triangle only).
+  /// aba: articulated-body inertias, eq. (38) (body frame; the upper triangle only); minv's
+  /// recursion: articulated inertias in the world frame (the upper triangle only).
   std::vector<Mat6> IA;
   /// crba: composite inertias of the subtrees, eq. (50) (body frame when crba_local, else world).
   std::vector<Inertia> Ic;
@@ -60,11 +60,12 @@ struct Data {
   // ---- per coordinate
   /// sin and cos of every joint coordinate (nq; read for revolute joints only): every algorithm.
   std::vector<double> sin_q, cos_q;
-  /// U = IA S of every joint dof (nv): aba (body frame), minv (world frame).
+  /// U = IA S of every joint dof (nv): aba (body frame), minv's recursion (world frame).
   std::vector<Vec6> U;
-  /// 1 / (S^T IA S) (nv): aba, minv. u = tau - S^T pA (nv): aba.
+  /// 1 / (S^T IA S) (nv): aba, minv (the factor route's 1 / Diag_k, the same pivots). u = tau - S^T
+  /// pA (nv): aba.
   std::vector<double> Dinv, u;
-  /// The joint axes S_i in the world frame (nv): minv.
+  /// The joint axes S_i in the world frame (nv): minv's recursion.
   std::vector<Vec6> S;
 
   // ---- outputs (nv; the free base's six coordinates first)
@@ -93,6 +94,13 @@ struct Data {
   /// world frame (forward kinematics, world inertias, six multiply-adds per pair): chosen when
   /// the pairs are few, i.e. for shallow trees (set from the model; may be overridden).
   bool crba_local = true;
+  /// minv factorizes crba's D (D = L^T Diag L along the tree, then D^-1 row by row) rather than
+  /// running the recursion of eqs. (55)-(63): chosen for small, shallow trees, where the
+  /// recursion's column loops are short (set from the model; may be overridden before the first
+  /// minv call). The factor route fills M (and what crba fills) and leaves oMb, IA, U, S alone.
+  bool minv_by_factor = false;
+  /// The parent of every dof along the tree (-1: none); a free base's six dofs form a chain.
+  std::vector<int> v_parent;
 
   /// Sizes M and crba's workspaces (done by crba's first call otherwise).
   void reserve_crba(const Model& model);
@@ -130,7 +138,8 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
 /// Mass matrix D (eq. 50) by the composite-rigid-body algorithm; both triangles filled.
 const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q);
 
-/// D^-1 by the recursive factorization of eqs. (55)-(63), O(n) per column; both triangles.
+/// D^-1, both triangles: by the recursive factorization of eqs. (55)-(63), O(n) per column, or
+/// for small shallow trees by factorizing crba's D (Data::minv_by_factor says which).
 const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q);
 
 /// H(q, v, g) with D vdot + H = tau (note: the paper's eq. (30) writes +H on the right).

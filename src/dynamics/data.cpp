@@ -6,6 +6,11 @@ namespace se3 {
 namespace {
 // crba runs in local frames when the ancestor-descendant pairs are at most this many per body.
 constexpr int kCrbaLocalPairsPerBody = 8;
+// minv factorizes CRBA's D when its row recurrence costs at most this many multiply-adds per dof
+// on average; the recursion's 6x6 base block costs more on a free base (docs/performance.md:
+// the crossovers measured on chains, fixed ~23 and free ~35).
+constexpr int kMinvFactorWorkPerDof = 22;
+constexpr int kMinvFactorWorkPerDofFree = 32;
 }  // namespace
 
 Data::Data(const Model& model) {
@@ -35,6 +40,26 @@ Data::Data(const Model& model) {
   long pairs = 0;
   for (int i = 1; i <= model.n; ++i) pairs += model.subtree_end[i] - i;
   crba_local = pairs <= kCrbaLocalPairsPerBody * model.n;
+  // The parent dof of every dof: a free base's six form a chain, a body's joint hangs on its
+  // parent body's joint (or on the base's last dof, or on nothing for a fixed base).
+  const int v1 = model.nv_base() - 1;
+  v_parent.assign(nv, -1);
+  for (int k = 1; k < model.nv_base(); ++k) v_parent[k] = k - 1;
+  for (int i = 1; i <= model.n; ++i) {
+    const int p = model.parent[i];
+    v_parent[v1 + i] = p > 0 ? v1 + p : v1;
+  }
+  // D^-1 by factorizing D: its cost, sum over dofs k of depth_k k (the row recurrence), against
+  // the recursion's subtree column loops and per-body world inertias.
+  long factor_work = 0;
+  for (int k = 0; k < model.nv; ++k) {
+    int depth = 0;
+    for (int i = v_parent[k]; i >= 0; i = v_parent[i]) ++depth;
+    factor_work += static_cast<long>(depth) * k;
+  }
+  minv_by_factor =
+      factor_work <= (model.floating ? kMinvFactorWorkPerDofFree : kMinvFactorWorkPerDof) *
+                         static_cast<long>(model.nv);
   tau = VecX::Zero(model.nv);
   ddq = VecX::Zero(model.nv);
   nle = VecX::Zero(model.nv);
@@ -58,6 +83,7 @@ void Data::reserve_crba(const Model& model) {
 
 void Data::reserve_minv(const Model& model) {
   if (minv_reserved_) return;
+  if (minv_by_factor) reserve_crba(model);
   Minv = MatX::Zero(model.nv, model.nv);
   if (Fm.cols() != model.nv) Fm = Mat6X::Zero(6, model.nv);
   for (Mat6X& P : Pm) P = Mat6X::Zero(6, model.nv);
