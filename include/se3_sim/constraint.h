@@ -104,6 +104,40 @@ struct DelassusWorkspace {
 void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W, DelassusWorkspace& ws);
 
+/// Y.topRows(nv) = D^-1 J^T for the first `rows` rows of J (their first nv columns the robot's,
+/// Minv = D^-1 symmetric): column r sums D^-1's columns over row r's non-zero entries only (a
+/// contact row moves its link's ancestor joints and a free base). No W.
+void robot_inverse_mass_jacobian(const ConstraintRows::RowMat& J, int rows, int nv,
+                                 const MatX& Minv, MatX& Y);
+
+/// The Delassus matrix W = J D^-1 J^T of a step's rows with its columns formed on demand: Y =
+/// D^-1 J^T is given, W's diagonal is formed by delassus_begin, and column j, W(:, j) = J Y(:, j)
+/// over every row, the first time delassus_column asks for it. Row r touches the systems of
+/// mask[r] (bit s: J's columns first[s] .. first[s] + width[s] - 1; D^-1 is block-diagonal by
+/// system), so a column sums over its own row's systems alone. The pointers are the caller's
+/// (set before each step: a copied owner re-points them); reserve sizes the rest once.
+struct DelassusColumns {
+  const ConstraintRows::RowMat* J = nullptr;  ///< the rows' Jacobian (row-major)
+  const MatX* Y = nullptr;                    ///< D^-1 J^T, a column per row
+  MatX* W = nullptr;                          ///< column j valid once done[j]
+  const std::uint64_t* mask = nullptr;        ///< per row: the systems it touches
+  std::vector<int> first, width;              ///< per system: its columns of J
+  VecX diag;                                  ///< W_rr, every row
+  std::vector<std::uint8_t> done;             ///< per row: its column formed
+  int rows = 0;
+  int formed = 0;  ///< columns formed since delassus_begin
+
+  void reserve(int capacity, int systems);
+};
+
+/// A new step of `rows` rows: no column formed, W's diagonal from J and Y.
+void delassus_begin(DelassusColumns& d, int rows);
+/// W(:, j) over the step's rows (formed the first time).
+const double* delassus_column(DelassusColumns& d, int j);
+/// Every column not formed yet (then W's first rows x rows block is the whole, symmetric to
+/// rounding).
+void delassus_complete(DelassusColumns& d);
+
 /// row[col0 + k] += s d . (v_k + w_k x p) over the coordinates k that move `body` (its path to the
 /// root, a free base's six): the velocity of the world point p fixed on `body` along the world
 /// direction d. The one point Jacobian every builder uses. body < 0 (the world) adds nothing.

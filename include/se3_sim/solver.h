@@ -18,6 +18,10 @@
 //     pivoting, a relative regularization `regularization` W_ii on the diagonal for redundant
 //     contacts), update the guess from the signs it violates, repeat; then a few PGS sweeps
 //     from the result make it feasible to rounding. Exact on stacks where PGS is soft.
+//     It reads W by columns, and only those of the rows that carry impulse (W symmetric:
+//     r = c + sum over those rows j of W(:, j) p_j); on W's lazy columns (DelassusColumns,
+//     constraint.h) it forms just those, so a problem whose contacts mostly carry no load (a
+//     robot's feet with their hulls' near contacts) skips most of the product J D^-1 J^T.
 // The workspace is sized once (reserve); the solvers allocate nothing afterwards.
 #pragma once
 
@@ -45,6 +49,7 @@ struct SolverStats {
   int rank = 0;           ///< solve_equality: numerical rank
   bool singular = false;  ///< solve_equality took the pseudo-inverse
   bool fallback = false;  ///< solve_active_set did not settle: PGS from the warm start solved it
+  int columns = 0;        ///< W's columns formed (lazy columns) or given (the full product)
 };
 
 /// What the solvers keep between calls (sized for at most `capacity` rows).
@@ -73,6 +78,18 @@ SolverStats solve_pgs(const MatX& W, const VecX& c, const ConstraintRows& rows, 
 /// The active-set (Newton-type) solver, same arguments; p is its first guess (warm start).
 SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows& rows, VecX& p,
                              SolverWorkspace& ws, const SolverOptions& opt);
+/// The same on W's lazy columns (W.Y, W.diag and W.done set up by delassus_begin): the columns
+/// of the rows that start active, then of those the solver activates. When more than half the
+/// rows start active (lazy_columns_pay), and before a fall-back to PGS, every column is formed
+/// and the solve is the one above on the whole W.
+SolverStats solve_active_set(DelassusColumns& W, const VecX& c, const ConstraintRows& rows, VecX& p,
+                             SolverWorkspace& ws, const SolverOptions& opt);
+/// The rows that the active set's first guess makes active (a unilateral row with warm impulse
+/// or a free residual below -1e-9 m/s, with its friction rows; every equality row): the
+/// columns its first system needs.
+int starting_active_rows(const VecX& c, const ConstraintRows& rows, const VecX& p);
+/// Whether forming W's columns on demand pays: at most half the rows start active.
+bool lazy_columns_pay(const VecX& c, const ConstraintRows& rows, const VecX& p);
 
 enum class ContactSolver { PGS, ActiveSet };
 /// "pgs" or "active_set" (std::invalid_argument otherwise).

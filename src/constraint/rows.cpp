@@ -137,6 +137,61 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
   }
 }
 
+void robot_inverse_mass_jacobian(const ConstraintRows::RowMat& J, int rows, int nv,
+                                 const MatX& Minv, MatX& Y) {
+  for (int r = 0; r < rows; ++r) {
+    const double* j = J.row(r).data();  // row-major: row r is contiguous
+    auto y = Y.col(r).head(nv);
+    y.setZero();
+    for (int a = 0; a < nv; ++a) {
+      if (j[a] != 0) y += j[a] * Minv.col(a);  // D^-1 symmetric: its column a is its row a
+    }
+  }
+}
+
+void DelassusColumns::reserve(int capacity, int systems) {
+  first.assign(systems, 0);
+  width.assign(systems, 0);
+  diag = VecX::Zero(capacity);
+  done.assign(capacity, 0);
+}
+
+void delassus_begin(DelassusColumns& d, int rows) {
+  const ConstraintRows::RowMat& J = *d.J;
+  const MatX& Y = *d.Y;
+  d.rows = rows;
+  d.formed = 0;
+  for (int r = 0; r < rows; ++r) {
+    d.done[r] = 0;
+    double w = 0;
+    for (std::uint64_t m = d.mask[r]; m; m &= m - 1) {
+      const int s = __builtin_ctzll(m);
+      w += J.row(r).segment(d.first[s], d.width[s]).dot(Y.col(r).segment(d.first[s], d.width[s]));
+    }
+    d.diag[r] = w;
+  }
+}
+
+const double* delassus_column(DelassusColumns& d, int j) {
+  MatX& W = *d.W;
+  if (d.done[j]) return &W(0, j);
+  const int n = d.rows;
+  auto w = W.col(j).head(n);
+  w.setZero();
+  for (std::uint64_t m = d.mask[j]; m; m &= m - 1) {
+    const int s = __builtin_ctzll(m);
+    w.noalias() +=
+        d.J->block(0, d.first[s], n, d.width[s]) * d.Y->col(j).segment(d.first[s], d.width[s]);
+  }
+  d.done[j] = 1;
+  ++d.formed;
+  return &W(0, j);
+}
+
+void delassus_complete(DelassusColumns& d) {
+  for (int j = 0; j < d.rows; ++j) delassus_column(d, j);
+}
+
 void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,
                     double* row) {
   if (body < 0 || !sys.model) return;
