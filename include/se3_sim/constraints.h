@@ -274,8 +274,8 @@ class ConstraintSystem final : public AccelerationHook {
   void free_body_inverse_mass_jacobian(int rows);
   /// Y_ = D^-1 J^T and W_ = J D^-1 J^T of the first `rows` rows (the full product).
   void delassus(const State& x, int rows);
-  /// Y_ and W's diagonal (lazy_w_), W's columns left to the solver.
-  void inverse_mass_jacobian(const State& x, int rows);
+  /// W's diagonal (lazy_w_); the columns of Y_ and W_ left to the solver.
+  void lazy_delassus(const State& x, int rows);
 
   const Model& model_;
   ConstraintSpec spec_;

@@ -137,36 +137,51 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
   }
 }
 
-void robot_inverse_mass_jacobian(const ConstraintRows::RowMat& J, int rows, int nv,
-                                 const MatX& Minv, MatX& Y) {
-  for (int r = 0; r < rows; ++r) {
-    const double* j = J.row(r).data();  // row-major: row r is contiguous
-    auto y = Y.col(r).head(nv);
-    y.setZero();
-    for (int a = 0; a < nv; ++a) {
-      if (j[a] != 0) y += j[a] * Minv.col(a);  // D^-1 symmetric: its column a is its row a
-    }
-  }
-}
-
-void DelassusColumns::reserve(int capacity, int systems) {
+void DelassusColumns::reserve(int capacity, int systems, int max_width) {
   first.assign(systems, 0);
   width.assign(systems, 0);
+  dinv.assign(systems, nullptr);
   diag = VecX::Zero(capacity);
   done.assign(capacity, 0);
+  nz.assign(std::max(0, max_width), 0);
 }
+
+namespace {
+
+// The non-zero entries of j[0 .. width - 1] into nz; their count.
+int nonzeros(const double* j, int width, int* nz) {
+  int k = 0;
+  for (int a = 0; a < width; ++a) {
+    if (j[a] != 0) nz[k++] = a;
+  }
+  return k;
+}
+
+}  // namespace
 
 void delassus_begin(DelassusColumns& d, int rows) {
   const ConstraintRows::RowMat& J = *d.J;
-  const MatX& Y = *d.Y;
+  int* nz = d.nz.data();
   d.rows = rows;
   d.formed = 0;
   for (int r = 0; r < rows; ++r) {
     d.done[r] = 0;
     double w = 0;
     for (std::uint64_t m = d.mask[r]; m; m &= m - 1) {
-      const int s = __builtin_ctzll(m);
-      w += J.row(r).segment(d.first[s], d.width[s]).dot(Y.col(r).segment(d.first[s], d.width[s]));
+      const int s = __builtin_ctzll(m), ws = d.width[s];
+      const double* j = J.row(r).data() + d.first[s];
+      const double* D = d.dinv[s];
+      const int k = nonzeros(j, ws, nz);
+      // j D j^T over the non-zero entries, D symmetric: the diagonal, then twice the lower part.
+      double twice = 0, diag = 0;
+      for (int p = 0; p < k; ++p) {
+        const double* col = D + static_cast<std::ptrdiff_t>(nz[p]) * ws;
+        double s_p = 0;
+        for (int q = 0; q < p; ++q) s_p += j[nz[q]] * col[nz[q]];
+        twice += j[nz[p]] * s_p;
+        diag += j[nz[p]] * j[nz[p]] * col[nz[p]];
+      }
+      w += diag + 2 * twice;
     }
     d.diag[r] = w;
   }
@@ -176,12 +191,23 @@ const double* delassus_column(DelassusColumns& d, int j) {
   MatX& W = *d.W;
   if (d.done[j]) return &W(0, j);
   const int n = d.rows;
+  const double* jr = d.J->row(j).data();
+  auto y = d.Y->col(j);
   auto w = W.col(j).head(n);
+  y.setZero();
   w.setZero();
   for (std::uint64_t m = d.mask[j]; m; m &= m - 1) {
-    const int s = __builtin_ctzll(m);
-    w.noalias() +=
-        d.J->block(0, d.first[s], n, d.width[s]) * d.Y->col(j).segment(d.first[s], d.width[s]);
+    const int s = __builtin_ctzll(m), c0 = d.first[s], ws = d.width[s];
+    // Y(s, j) = D^-1_s J(j, s)^T over the row's non-zero entries (D^-1 symmetric: its column a
+    // is its row a), then W(:, j) += J(:, s) Y(s, j).
+    double* ys = y.data() + c0;
+    for (int a = 0; a < ws; ++a) {
+      if (jr[c0 + a] == 0) continue;
+      const double* col = d.dinv[s] + static_cast<std::ptrdiff_t>(a) * ws;
+      const double v = jr[c0 + a];
+      for (int i = 0; i < ws; ++i) ys[i] += v * col[i];
+    }
+    w.noalias() += d.J->block(0, c0, n, ws) * y.segment(c0, ws);
   }
   d.done[j] = 1;
   ++d.formed;

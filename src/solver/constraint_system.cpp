@@ -291,7 +291,7 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   row_mask_.assign(max_rows_, 0);
   delassus_ws_.reserve(model_.nv, max_rows_);
   const int nsys = 1 + static_cast<int>(free_.size());
-  lazy_w_.reserve(max_rows_, nsys);
+  lazy_w_.reserve(max_rows_, nsys, std::max(model_.nv, 6));
   lazy_w_.width[0] = model_.nv;
   for (int j = 1; j < nsys; ++j) {
     lazy_w_.first[j] = model_.nv + 6 * (j - 1);
@@ -659,14 +659,9 @@ void ConstraintSystem::free_body_inverse_mass_jacobian(int rows) {
   }
 }
 
-void ConstraintSystem::inverse_mass_jacobian(const State& x, int rows) {
-  const int nvr = model_.nv;
-  if (row_masks(rows)) {
-    robot_inverse_mass_jacobian(rows_.J, rows, nvr, minv(model_, data_, x.base, x.q), Y_);
-  } else {
-    Y_.topLeftCorner(nvr, rows).setZero();
-  }
-  free_body_inverse_mass_jacobian(rows);
+void ConstraintSystem::lazy_delassus(const State& x, int rows) {
+  lazy_w_.dinv[0] = row_masks(rows) ? minv(model_, data_, x.base, x.q).data() : nullptr;
+  for (size_t j = 0; j < free_.size(); ++j) lazy_w_.dinv[j + 1] = free_[j].Minv.data();
   lazy_w_.J = &rows_.J;
   lazy_w_.Y = &Y_;
   lazy_w_.W = &W_;
@@ -781,19 +776,26 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     const bool lazy = opt_.solver == ContactSolver::ActiveSet && free_.size() < 64 &&
                       lazy_columns_pay(c_, rows_, p_);
     if (lazy) {
-      inverse_mass_jacobian(x, rows);
+      lazy_delassus(x, rows);
       st = solve_active_set(lazy_w_, c_, rows_, p_, ws_, solver_opt_);
+      // v+ = v* + D^-1 J^T p over the rows with impulse (their columns of Y are formed: the
+      // solver read them; delassus_column returns at once).
+      for (int r = 0; r < rows; ++r) {
+        if (p_[r] == 0) continue;
+        delassus_column(lazy_w_, r);
+        vfree_.noalias() += p_[r] * Y_.col(r);
+      }
     } else {
       delassus(x, rows);
       st = opt_.solver == ContactSolver::ActiveSet
                ? solve_active_set(W_, c_, rows_, p_, ws_, solver_opt_)
                : solve_pgs(W_, c_, rows_, p_, solver_opt_);
       st.columns = rows;
+      vfree_.noalias() += Y_.leftCols(rows) * p_.head(rows);
     }
     it = st.iterations;
     change = st.change;
     report_.delassus_columns = st.columns;
-    vfree_.noalias() += Y_.leftCols(rows) * p_.head(rows);
   }
   x.v = vfree_.head(nvr);
   for (size_t j = 0; j < free_.size(); ++j) (*in.bodies)[j].v = vfree_.segment<6>(nvr + 6 * j);
