@@ -393,7 +393,7 @@ struct RobotContacts {
     const int n = rows.count;
     Ylazy = MatX::Constant(m.nv, n, std::numeric_limits<double>::quiet_NaN());
     Wlazy = MatX::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
-    d.reserve(n, 1, m.nv);
+    d.reserve(n, 1);
     d.width[0] = m.nv;
     d.dinv[0] = Minv.data();
     d.J = &rows.J;
@@ -414,7 +414,7 @@ struct RobotContacts {
 // W's columns formed on demand (DelassusColumns): with 4 of 30 contacts carrying load the active
 // set forms the columns of those 4 contacts' rows (and any its polish activates), not all 90,
 // and finds the same impulses as on the full product; a column of Y or W read before it is
-// formed would be NaN. W's diagonal (the rows' quadratic forms in D^-1) is the product's.
+// formed would be NaN.
 TEST(LazyDelassus, SameImpulsesAsTheFullProductFromFewColumns) {
   for (std::uint64_t seed : {3, 14, 15}) {
     SCOPED_TRACE(seed);
@@ -424,7 +424,6 @@ TEST(LazyDelassus, SameImpulsesAsTheFullProductFromFewColumns) {
     MatX Ylazy, Wlazy;
     DelassusColumns d;
     pb.lazy(d, Ylazy, Wlazy);
-    EXPECT_LT(se3_test::rel_err(d.diag.head(n), pb.W.diagonal()), 1e-13);
     EXPECT_TRUE(lazy_columns_pay(pb.c, pb.rows, VecX::Zero(n)));
 
     SolverWorkspace ws_full, ws_lazy;

@@ -274,7 +274,7 @@ class ConstraintSystem final : public AccelerationHook {
   void free_body_inverse_mass_jacobian(int rows);
   /// Y_ = D^-1 J^T and W_ = J D^-1 J^T of the first `rows` rows (the full product).
   void delassus(const State& x, int rows);
-  /// W's diagonal (lazy_w_); the columns of Y_ and W_ left to the solver.
+  /// lazy_w_ for this step: the columns of Y_ and W_ left to the solver.
   void lazy_delassus(const State& x, int rows);
 
   const Model& model_;

@@ -137,54 +137,17 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
   }
 }
 
-void DelassusColumns::reserve(int capacity, int systems, int max_width) {
+void DelassusColumns::reserve(int capacity, int systems) {
   first.assign(systems, 0);
   width.assign(systems, 0);
   dinv.assign(systems, nullptr);
-  diag = VecX::Zero(capacity);
   done.assign(capacity, 0);
-  nz.assign(std::max(0, max_width), 0);
 }
-
-namespace {
-
-// The non-zero entries of j[0 .. width - 1] into nz; their count.
-int nonzeros(const double* j, int width, int* nz) {
-  int k = 0;
-  for (int a = 0; a < width; ++a) {
-    if (j[a] != 0) nz[k++] = a;
-  }
-  return k;
-}
-
-}  // namespace
 
 void delassus_begin(DelassusColumns& d, int rows) {
-  const ConstraintRows::RowMat& J = *d.J;
-  int* nz = d.nz.data();
   d.rows = rows;
   d.formed = 0;
-  for (int r = 0; r < rows; ++r) {
-    d.done[r] = 0;
-    double w = 0;
-    for (std::uint64_t m = d.mask[r]; m; m &= m - 1) {
-      const int s = __builtin_ctzll(m), ws = d.width[s];
-      const double* j = J.row(r).data() + d.first[s];
-      const double* D = d.dinv[s];
-      const int k = nonzeros(j, ws, nz);
-      // j D j^T over the non-zero entries, D symmetric: the diagonal, then twice the lower part.
-      double twice = 0, diag = 0;
-      for (int p = 0; p < k; ++p) {
-        const double* col = D + static_cast<std::ptrdiff_t>(nz[p]) * ws;
-        double s_p = 0;
-        for (int q = 0; q < p; ++q) s_p += j[nz[q]] * col[nz[q]];
-        twice += j[nz[p]] * s_p;
-        diag += j[nz[p]] * j[nz[p]] * col[nz[p]];
-      }
-      w += diag + 2 * twice;
-    }
-    d.diag[r] = w;
-  }
+  std::fill(d.done.begin(), d.done.begin() + rows, 0);
 }
 
 const double* delassus_column(DelassusColumns& d, int j) {

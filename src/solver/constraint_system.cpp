@@ -291,7 +291,7 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   row_mask_.assign(max_rows_, 0);
   delassus_ws_.reserve(model_.nv, max_rows_);
   const int nsys = 1 + static_cast<int>(free_.size());
-  lazy_w_.reserve(max_rows_, nsys, std::max(model_.nv, 6));
+  lazy_w_.reserve(max_rows_, nsys);
   lazy_w_.width[0] = model_.nv;
   for (int j = 1; j < nsys; ++j) {
     lazy_w_.first[j] = model_.nv + 6 * (j - 1);

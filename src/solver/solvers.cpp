@@ -173,15 +173,17 @@ constexpr double kImpTol = 1e-12;  // N s
 
 // W read by columns, all of them there (the full product)...
 struct DenseColumns {
+  static constexpr bool kLazy = false;
   const MatX& W;
   const double* col(int j) const { return &W(0, j); }
   double diag(int j) const { return W(j, j); }
 };
-// ... or formed the first time the solver asks for one.
+// ... or formed the first time the solver asks for one (W_jj with its column).
 struct LazyColumns {
+  static constexpr bool kLazy = true;
   DelassusColumns& D;
   const double* col(int j) { return delassus_column(D, j); }
-  double diag(int j) const { return D.diag[j]; }
+  double diag(int j) { return delassus_column(D, j)[j]; }
 };
 
 // r += s w over the first n entries.
@@ -204,8 +206,9 @@ void residuals(Cols& W, const VecX& c, const VecX& p, int n, VecX& r) {
 }
 
 // Projected Gauss-Seidel sweeps as solve_pgs (the same updates in the same order), on the
-// residuals r = c + W p kept up to date: a row whose impulse changes by d adds d W(:, row) to r,
-// so a row that keeps its impulse (a separated contact stays at zero) reads only its r and W_ii.
+// residuals r = c + W p kept up to date: a row whose impulse changes by d adds d W(:, row) to r.
+// On lazy columns a row that stays at zero (a separated contact: p = 0, r >= 0, and its
+// friction without load) reads only its r: neither its column nor its pivot W_kk.
 template <class Cols>
 SolverStats pgs_on_residuals(Cols& W, const ConstraintRows& rows, VecX& p, VecX& r,
                              const SolverOptions& opt) {
@@ -225,7 +228,8 @@ SolverStats pgs_on_residuals(Cols& W, const ConstraintRows& rows, VecX& p, VecX&
     for (int k = 0; k < n; ++k) {
       const RowType t = rows.type[k];
       if (t == RowType::ContactFriction) continue;  // with its normal, below
-      const double wkk = W.diag(k);
+      const bool stays = Cols::kLazy && t != RowType::Equality && p[k] == 0 && res[k] >= 0;
+      const double wkk = stays ? 0.0 : W.diag(k);
       if (wkk > kTinyPivot) {
         double np = p[k] - res[k] / wkk;
         if (t != RowType::Equality) np = std::max(0.0, np);
@@ -233,6 +237,7 @@ SolverStats pgs_on_residuals(Cols& W, const ConstraintRows& rows, VecX& p, VecX&
       }
       const int f1 = rows.friction[k], f2 = rows.friction2[k];
       if (f1 == ConstraintRows::kNone) continue;
+      if (Cols::kLazy && p[k] == 0 && p[f1] == 0 && p[f2] == 0) continue;  // radius 0: they stay
       const double w1 = W.diag(f1), w2 = W.diag(f2);
       double n1 = w1 > kTinyPivot ? p[f1] - res[f1] / w1 : 0.0;
       double n2 = w2 > kTinyPivot ? p[f2] - res[f2] / w2 : 0.0;
