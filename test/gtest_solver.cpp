@@ -2,7 +2,8 @@
 // answers: a box resting on the ground (the normal impulses carry m g h, shared by the four
 // corners), sliding (the tangential velocity drops by mu g h) and sticking (below mu g h it
 // stops), a rank-deficient bilateral pair (the pseudo-inverse), and a stack of three boxes,
-// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact; the
+// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact, and a
+// two-cycle of its guesses that it freezes; the
 // robot's Delassus block over each row's non-zero columns against the dense product; W's columns
 // formed on demand (4 of 30 contacts loaded) against the full product.
 #include <gtest/gtest.h>
@@ -333,7 +334,10 @@ struct RobotContacts {
   VecX c;
   std::vector<std::uint64_t> mask;
 
-  RobotContacts(int count, int touching, std::uint64_t seed, int light = -1)
+  // approach >= 0: the touching contacts approach at that speed without slipping instead (the
+  // least-squares v* over their rows), whatever impulses that takes.
+  RobotContacts(int count, int touching, std::uint64_t seed, int light = -1, double mu = 0.8,
+                double approach = -1)
       : m(solo12()), data(m) {
     std::mt19937_64 rng(seed);
     const se3_test::RandomState s = se3_test::random_state(m, rng);
@@ -345,7 +349,7 @@ struct RobotContacts {
       frames.push_back(FrameRef{0, i});
       CollisionObject o;
       o.frame = i;
-      o.mu = 0.8;
+      o.mu = mu;
       objects.push_back(o);
     }
     CollisionObject ground;
@@ -378,7 +382,13 @@ struct RobotContacts {
     // without slipping (a sticking solution inside the cone), the others, 5 mm away, stay apart.
     VecX pstar = VecX::Zero(n);
     for (int k = 0; k < touching; ++k) pstar[3 * k] = k == light ? 1e-7 : 1e-3 * (1 + 0.1 * k);
-    const VecX vfree = -Y * pstar;
+    VecX vfree = -Y * pstar;
+    if (approach >= 0) {
+      const MatX Jt = rows.J.topRows(3 * touching);
+      VecX rhs = VecX::Zero(3 * touching);
+      for (int k = 0; k < touching; ++k) rhs[3 * k] = -approach;
+      vfree = Jt.transpose() * (Jt * Jt.transpose()).ldlt().solve(rhs);
+    }
     c = rows.J.topRows(n) * vfree - rows.b.head(n);
     mask.assign(n, 1);  // every row moves the robot (one system)
   }
@@ -524,4 +534,35 @@ TEST(LazyDelassus, ARowTheSolverActivatesGetsItsColumnsThen) {
     }
   }
   EXPECT_TRUE(found) << "no configuration where a loaded foot starts apart";
+}
+
+// Feet that approach the ground without slipping whatever that takes (seed 3): sticking on all
+// four needs a pull at one foot, which then separates, and without it that foot sinks; the
+// guesses alternate between the two. The flipping foot is frozen at its new guess, the solve
+// settles within the 30 updates (no PGS fall-back), and the polish leaves a result as good as
+// many PGS sweeps': no impulse pulls, and no row approaches faster than PGS's.
+TEST(Solver, ActiveSetFreezesATwoCycle) {
+  const RobotContacts pb(30, 4, 3, -1, 4.0, 0.01);
+  const int n = pb.rows.count;
+  SolverWorkspace ws;
+  ws.reserve(n, 0);
+  VecX p = VecX::Zero(n), q = VecX::Zero(n);
+  const SolverStats st = solve_active_set(pb.W, pb.c, pb.rows, p, ws, SolverOptions());
+  solve_pgs(pb.W, pb.c, pb.rows, q, many_sweeps());
+  const VecX r = pb.c + pb.W * p, rq = pb.c + pb.W * q;
+  double sink = 0, sink_pgs = 0, pull = 0;
+  for (int k = 0; k < n; ++k) {
+    if (pb.rows.type[k] != RowType::ContactNormal) continue;
+    sink = std::max(sink, -r[k]);
+    sink_pgs = std::max(sink_pgs, -rq[k]);
+    pull = std::max(pull, -p[k]);
+  }
+  std::printf(
+      "two-cycle: %d updates, fallback %d, sinking %.2g m/s (PGS %.2g), impulses %.2g "
+      "from PGS's (relative)\n",
+      st.iterations, st.fallback, sink, sink_pgs, se3_test::rel_err(p, q));
+  EXPECT_FALSE(st.fallback);
+  EXPECT_LT(st.iterations, 30);
+  EXPECT_LE(pull, 0.0);
+  EXPECT_LT(sink, std::max(sink_pgs, 1e-9) * 10);
 }
