@@ -2,10 +2,10 @@
 // answers: a box resting on the ground (the normal impulses carry m g h, shared by the four
 // corners), sliding (the tangential velocity drops by mu g h) and sticking (below mu g h it
 // stops), a rank-deficient bilateral pair (the pseudo-inverse), and a stack of three boxes,
-// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact, and a
-// two-cycle of its guesses that it freezes; the
-// robot's Delassus block over each row's non-zero columns against the dense product; W's columns
-// formed on demand (4 of 30 contacts loaded) against the full product.
+// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact; a
+// two-cycle of the active set's guesses, which it freezes; the robot's Delassus block over each
+// row's non-zero columns against the dense product; W's columns formed on demand (4 of 30
+// contacts loaded) against the full product.
 #include <gtest/gtest.h>
 
 #include <cmath>
