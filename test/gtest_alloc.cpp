@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <new>
@@ -424,4 +425,57 @@ TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
             }),
             0);
   EXPECT_LT(states[1].v.norm(), 1e-3);  // the contacts held the boxes
+}
+
+// W's columns formed on demand (the active set with most rows unloaded: a box resting on four
+// corners among 16 contacts 5 mm apart; the robot flies, without its ground contacts) take
+// nothing from the heap either: the "column formed" flags and W's diagonal are sized with the
+// rest of the constraint system.
+TEST(Alloc, LazyDelassusColumnsAllocateNothing) {
+  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  Scene sc = load_scene(scenes + "quadruped_ground.yaml");
+  sc.constraints.options.solver = ContactSolver::ActiveSet;
+  const Model m = scene_model(sc);
+  ConstraintSpec spec = scene_constraints(sc, m);
+  spec.ground = false;  // the robot flies: the box's contacts alone
+  ConstraintSystem cs(m, spec);
+  Model box;
+  box.floating = true;
+  box.start_with_base("box", Inertia::from_com(1, Vec3::Zero(), 0.01 * Mat3::Identity()));
+  box.finalize();
+  std::vector<const Model*> models = {&box};
+  cs.set_free_bodies(models, 20);
+  std::vector<State> states = {State(box)};
+  states[0].base.p = Vec3(2, 0, 0.1);
+  std::vector<VecX> a_free(1, VecX::Zero(6));
+  a_free[0][5] = -9.81;
+  std::vector<CollisionObject> objects(2);
+  objects[0].frame = m.n + 1;
+  objects[1].frame = CollisionObject::kWorld;  // the ground
+  std::vector<Contact> contacts;
+  for (int k = 0; k < 20; ++k) {  // four corners touching, then 16 points 5 mm apart
+    Contact c;
+    c.a = 1;
+    c.b = 0;
+    c.point = k < 4 ? Vec3(2 + ((k & 1) ? 0.1 : -0.1), (k & 2) ? 0.1 : -0.1, 0)
+                    : Vec3(2 + 0.1 * std::cos(0.4 * k), 0.1 * std::sin(0.4 * k), 0);
+    c.depth = k < 4 ? 0.0 : -0.005;
+    contacts.push_back(c);
+  }
+  ContactBodies cb;
+  cb.models = &models;
+  cb.states = &states;
+  cb.a_free = &a_free;
+  cb.contacts = &contacts;
+  cb.objects = &objects;
+  State x = scene_state(sc, m);
+  auto stepper = make_stepper(sc.integrator, m);
+  const VecX tau = VecX::Zero(m.nv);
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(constrained_step(cs, *stepper, x, tau, sc.dt, cb).ok);
+  EXPECT_EQ(allocations_of([&] {
+              for (int k = 0; k < 300; ++k) constrained_step(cs, *stepper, x, tau, sc.dt, cb);
+            }),
+            0);
+  EXPECT_LT(cs.report().delassus_columns, cs.report().rows / 2);  // the lazy path was taken
+  EXPECT_LT(states[0].v.norm(), 1e-3);                            // the corners held the box
 }

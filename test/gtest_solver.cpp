@@ -2,13 +2,17 @@
 // answers: a box resting on the ground (the normal impulses carry m g h, shared by the four
 // corners), sliding (the tangential velocity drops by mu g h) and sticking (below mu g h it
 // stops), a rank-deficient bilateral pair (the pseudo-inverse), and a stack of three boxes,
-// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact; the
-// robot's Delassus block over each row's non-zero columns against the dense product.
+// where projected Gauss-Seidel at few sweeps is soft and the active-set solver is exact; a
+// two-cycle of the active set's guesses, which it freezes; the robot's Delassus block over each
+// row's non-zero columns against the dense product; W's columns formed on demand (4 of 30
+// contacts loaded) against the full product.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include "se3_sim/constraint.h"
@@ -309,4 +313,256 @@ TEST(Delassus, RobotBlockIsTheDenseProductWithContactsOnEveryLink) {
       EXPECT_EQ(nonzero, 6 + depth) << "row " << r;
     }
   }
+}
+
+namespace {
+
+// Solo12 (free base) with contacts on the ground plane: the first `touching` at the four feet's
+// origins touching (gap 0) and approaching, the others at random points of random
+// links 5 mm above the ground (within the margin, separating: no load), as a hull's near
+// vertices give them. W and Y as the dense products, for the full path.
+struct RobotContacts {
+  Model m;
+  Data data;
+  SystemKinematics kin;
+  std::vector<const SystemKinematics*> systems;
+  std::vector<FrameRef> frames;
+  std::vector<CollisionObject> objects;
+  std::vector<Contact> contacts;
+  ConstraintRows rows;
+  MatX Minv, Y, W;
+  VecX c;
+  std::vector<std::uint64_t> mask;
+
+  // approach >= 0: the touching contacts approach at that speed without slipping instead (the
+  // least-squares v* over their rows), whatever impulses that takes.
+  RobotContacts(int count, int touching, std::uint64_t seed, int light = -1, double mu = 0.8,
+                double approach = -1)
+      : m(solo12()), data(m) {
+    std::mt19937_64 rng(seed);
+    const se3_test::RandomState s = se3_test::random_state(m, rng);
+    forward_kinematics(m, data, s.base, s.q);
+    kin.reset(m, data.oMb, 0);
+    kin.update_world_axes();
+    systems = {&kin};
+    for (int i = 0; i <= m.n; ++i) {
+      frames.push_back(FrameRef{0, i});
+      CollisionObject o;
+      o.frame = i;
+      o.mu = mu;
+      objects.push_back(o);
+    }
+    CollisionObject ground;
+    ground.frame = CollisionObject::kWorld;
+    ground.halfspace = true;
+    objects.push_back(ground);
+    const int feet[4] = {3, 6, 9, 12};
+    for (int k = 0; k < count; ++k) {
+      Contact ct;
+      ct.a = m.n + 1;  // the ground
+      if (k < 4) {
+        ct.b = feet[k];
+        ct.point = data.oMb[ct.b].p;
+      } else {
+        ct.b = static_cast<int>(std::uniform_int_distribution<int>(0, m.n)(rng));
+        ct.point = data.oMb[ct.b].act(se3_test::random_vec(rng, 3, 0.05));
+      }
+      ct.depth = k < touching ? 0.0 : -0.005;
+      contacts.push_back(ct);
+    }
+    rows.reserve(m.nv, 3 * count);
+    VecX v0 = VecX::Zero(m.nv);
+    add_contact_rows(rows, contacts, objects, frames, systems, v0, kH, RowParams());
+    const int n = rows.count;
+    Minv = minv(m, data, s.base, s.q);
+    Y = Minv * rows.J.topRows(n).transpose();
+    W = rows.J.topRows(n) * Y;
+    // The free velocity that normal impulses of 1 to 1.3 mN s at the touching contacts (no
+    // friction; 1e-7 N s at the `light` one) stop exactly, v* = -D^-1 J_t^T p*: they hold
+    // without slipping (a sticking solution inside the cone), the others, 5 mm away, stay apart.
+    VecX pstar = VecX::Zero(n);
+    for (int k = 0; k < touching; ++k) pstar[3 * k] = k == light ? 1e-7 : 1e-3 * (1 + 0.1 * k);
+    VecX vfree = -Y * pstar;
+    if (approach >= 0) {
+      const MatX Jt = rows.J.topRows(3 * touching);
+      VecX rhs = VecX::Zero(3 * touching);
+      for (int k = 0; k < touching; ++k) rhs[3 * k] = -approach;
+      vfree = Jt.transpose() * (Jt * Jt.transpose()).ldlt().solve(rhs);
+    }
+    c = rows.J.topRows(n) * vfree - rows.b.head(n);
+    mask.assign(n, 1);  // every row moves the robot (one system)
+  }
+  static Model solo12() {
+    UrdfOptions opt;
+    opt.floating = true;
+    return model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
+  }
+  // The lazy columns over this problem, Y's and W's storage NaN so that a column read before it
+  // is formed spoils the impulses.
+  void lazy(DelassusColumns& d, MatX& Ylazy, MatX& Wlazy) const {
+    const int n = rows.count;
+    Ylazy = MatX::Constant(m.nv, n, std::numeric_limits<double>::quiet_NaN());
+    Wlazy = MatX::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+    d.reserve(n, 1);
+    d.width[0] = m.nv;
+    d.dinv[0] = Minv.data();
+    d.J = &rows.J;
+    d.Y = &Ylazy;
+    d.W = &Wlazy;
+    d.mask = mask.data();
+    delassus_begin(d, n);
+  }
+  int loaded(const VecX& p) const {
+    int k = 0;
+    for (int r = 0; r < rows.count; ++r) k += rows.type[r] == RowType::ContactNormal && p[r] > 0;
+    return k;
+  }
+};
+
+}  // namespace
+
+// W's columns formed on demand (DelassusColumns): with 4 of 30 contacts carrying load the active
+// set forms the columns of those 4 contacts' rows (and any its polish activates), not all 90,
+// and finds the same impulses as on the full product; a column of Y or W read before it is
+// formed would be NaN.
+TEST(LazyDelassus, SameImpulsesAsTheFullProductFromFewColumns) {
+  for (std::uint64_t seed : {3, 14, 15}) {
+    SCOPED_TRACE(seed);
+    const RobotContacts pb(30, 4, seed);
+    const int n = pb.rows.count;
+    ASSERT_EQ(n, 90);
+    MatX Ylazy, Wlazy;
+    DelassusColumns d;
+    pb.lazy(d, Ylazy, Wlazy);
+    EXPECT_TRUE(lazy_columns_pay(pb.c, pb.rows, VecX::Zero(n)));
+
+    SolverWorkspace ws_full, ws_lazy;
+    ws_full.reserve(n, 0);
+    ws_lazy.reserve(n, 0);
+    VecX p_full = VecX::Zero(n), p_lazy = VecX::Zero(n);
+    const SolverStats full =
+        solve_active_set(pb.W, pb.c, pb.rows, p_full, ws_full, SolverOptions());
+    const SolverStats lazy = solve_active_set(d, pb.c, pb.rows, p_lazy, ws_lazy, SolverOptions());
+    std::printf(
+        "4 of 30 contacts loaded: %d of %d columns formed, %d updates, impulses %.2g apart "
+        "(relative)\n",
+        lazy.columns, n, lazy.iterations, se3_test::rel_err(p_lazy, p_full));
+    EXPECT_FALSE(full.fallback);
+    EXPECT_FALSE(lazy.fallback);
+    EXPECT_EQ(full.columns, n);
+    EXPECT_EQ(lazy.columns, d.formed);
+    EXPECT_LT(lazy.columns, n / 3);
+    EXPECT_GE(lazy.columns, 12);  // the loaded contacts' rows at least
+    EXPECT_EQ(pb.loaded(p_full), 4);
+    EXPECT_EQ(pb.loaded(p_lazy), 4);
+    ASSERT_TRUE(p_lazy.allFinite());
+    EXPECT_LT(se3_test::rel_err(p_lazy, p_full), 1e-12);
+    // The formed columns are the full products'.
+    for (int j = 0; j < n; ++j) {
+      if (d.done[j]) {
+        EXPECT_LT(se3_test::rel_err(Ylazy.col(j), pb.Y.col(j)), 1e-13) << j;
+        EXPECT_LT(se3_test::rel_err(Wlazy.col(j), pb.W.col(j)), 1e-13) << j;
+      }
+    }
+  }
+}
+
+// When most rows start active (the four feet touching and approaching, two contacts apart), the
+// lazy entry forms every column first and solves on the whole W: the same impulses as the full
+// product.
+TEST(LazyDelassus, MostRowsActiveTakeTheFullProduct) {
+  const RobotContacts pb(6, 4, 7);
+  const int n = pb.rows.count;
+  EXPECT_GT(2 * starting_active_rows(pb.c, pb.rows, VecX::Zero(n)), n);
+  EXPECT_FALSE(lazy_columns_pay(pb.c, pb.rows, VecX::Zero(n)));
+  MatX Ylazy, Wlazy;
+  DelassusColumns d;
+  pb.lazy(d, Ylazy, Wlazy);
+  SolverWorkspace ws_full, ws_lazy;
+  ws_full.reserve(n, 0);
+  ws_lazy.reserve(n, 0);
+  VecX p_full = VecX::Zero(n), p_lazy = VecX::Zero(n);
+  const SolverStats full = solve_active_set(pb.W, pb.c, pb.rows, p_full, ws_full, SolverOptions());
+  const SolverStats lazy = solve_active_set(d, pb.c, pb.rows, p_lazy, ws_lazy, SolverOptions());
+  EXPECT_FALSE(full.fallback);
+  EXPECT_EQ(pb.loaded(p_lazy), 4);
+  EXPECT_EQ(lazy.columns, n);
+  EXPECT_TRUE(Wlazy.allFinite());
+  EXPECT_LT(se3_test::rel_err(Ylazy, pb.Y), 1e-13);
+  EXPECT_LT(se3_test::rel_err(p_lazy, p_full), 1e-12);
+  // A warm start counts as active too: with impulse on every contact of the 4-of-30 problem,
+  // the full path again.
+  const RobotContacts few(30, 4, 3);
+  VecX warm = VecX::Zero(few.rows.count);
+  for (int r = 0; r < few.rows.count; ++r) {
+    if (few.rows.type[r] == RowType::ContactNormal) warm[r] = 1e-6;
+  }
+  EXPECT_FALSE(lazy_columns_pay(few.c, few.rows, warm));
+}
+
+// A foot that carries little of the load (1e-7 N s against 1e-3) can start separating (free
+// residual > 0) while the other feet's impulses press it down: the active set activates it on
+// its second update, and its columns are formed then. Same impulses as on the full product.
+TEST(LazyDelassus, ARowTheSolverActivatesGetsItsColumnsThen) {
+  bool found = false;
+  for (std::uint64_t seed = 1; seed <= 20 && !found; ++seed) {
+    for (int light = 0; light < 4 && !found; ++light) {
+      const RobotContacts pb(30, 4, seed, light);
+      const int n = pb.rows.count;
+      if (!(pb.c[3 * light] > 1e-9)) continue;  // it starts active: not this case
+      found = true;
+      SCOPED_TRACE(seed);
+      MatX Ylazy, Wlazy;
+      DelassusColumns d;
+      pb.lazy(d, Ylazy, Wlazy);
+      SolverWorkspace ws_full, ws_lazy;
+      ws_full.reserve(n, 0);
+      ws_lazy.reserve(n, 0);
+      VecX p_full = VecX::Zero(n), p_lazy = VecX::Zero(n);
+      solve_active_set(pb.W, pb.c, pb.rows, p_full, ws_full, SolverOptions());
+      const SolverStats lazy = solve_active_set(d, pb.c, pb.rows, p_lazy, ws_lazy, SolverOptions());
+      std::printf("seed %d, foot %d starts apart: %d updates, %d of %d columns, %.2g apart\n",
+                  static_cast<int>(seed), light, lazy.iterations, lazy.columns, n,
+                  se3_test::rel_err(p_lazy, p_full));
+      EXPECT_FALSE(lazy.fallback);
+      EXPECT_GE(lazy.iterations, 2);
+      EXPECT_TRUE(d.done[3 * light]);
+      EXPECT_GT(p_lazy[3 * light], 0.0);
+      EXPECT_EQ(pb.loaded(p_lazy), 4);
+      EXPECT_LT(lazy.columns, n / 3);
+      EXPECT_LT(se3_test::rel_err(p_lazy, p_full), 1e-12);
+    }
+  }
+  EXPECT_TRUE(found) << "no configuration where a loaded foot starts apart";
+}
+
+// Feet that approach the ground without slipping whatever that takes (seed 3): sticking on all
+// four needs a pull at one foot, which then separates, and without it that foot sinks; the
+// guesses alternate between the two. The flipping foot is frozen at its new guess, the solve
+// settles within the 30 updates (no PGS fall-back), and the polish leaves a result as good as
+// many PGS sweeps': no impulse pulls, and no row approaches faster than PGS's.
+TEST(Solver, ActiveSetFreezesATwoCycle) {
+  const RobotContacts pb(30, 4, 3, -1, 4.0, 0.01);
+  const int n = pb.rows.count;
+  SolverWorkspace ws;
+  ws.reserve(n, 0);
+  VecX p = VecX::Zero(n), q = VecX::Zero(n);
+  const SolverStats st = solve_active_set(pb.W, pb.c, pb.rows, p, ws, SolverOptions());
+  solve_pgs(pb.W, pb.c, pb.rows, q, many_sweeps());
+  const VecX r = pb.c + pb.W * p, rq = pb.c + pb.W * q;
+  double sink = 0, sink_pgs = 0, pull = 0;
+  for (int k = 0; k < n; ++k) {
+    if (pb.rows.type[k] != RowType::ContactNormal) continue;
+    sink = std::max(sink, -r[k]);
+    sink_pgs = std::max(sink_pgs, -rq[k]);
+    pull = std::max(pull, -p[k]);
+  }
+  std::printf(
+      "two-cycle: %d updates, fallback %d, sinking %.2g m/s (PGS %.2g), impulses %.2g "
+      "from PGS's (relative)\n",
+      st.iterations, st.fallback, sink, sink_pgs, se3_test::rel_err(p, q));
+  EXPECT_FALSE(st.fallback);
+  EXPECT_LT(st.iterations, 30);
+  EXPECT_LE(pull, 0.0);
+  EXPECT_LT(sink, std::max(sink_pgs, 1e-9) * 10);
 }

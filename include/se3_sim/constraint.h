@@ -104,6 +104,37 @@ struct DelassusWorkspace {
 void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W, DelassusWorkspace& ws);
 
+/// The Delassus matrix W = J D^-1 J^T of a step's rows with its columns formed on demand: column
+/// j, Y(:, j) = D^-1 J(j, :)^T and W(:, j) = J Y(:, j) over every row, the first time
+/// delassus_column asks for it (W_jj with it: a row that needs its pivot gets its column too).
+/// Row r touches the systems of mask[r] (bit s: J's columns first[s] .. first[s] + width[s] - 1,
+/// D^-1's block dinv[s], column-major and symmetric: D^-1 is block-diagonal by system), so a
+/// column sums over its own row's systems alone, and D^-1 J(j, :)^T over the row's non-zero
+/// entries (a contact row moves its link's ancestor joints and a free base). The pointers are
+/// the caller's (set before each step: a copied owner re-points them); reserve sizes the rest
+/// once.
+struct DelassusColumns {
+  const ConstraintRows::RowMat* J = nullptr;  ///< the rows' Jacobian (row-major)
+  MatX* Y = nullptr;                          ///< D^-1 J^T: column j valid once done[j]
+  MatX* W = nullptr;                          ///< column j valid once done[j]
+  const std::uint64_t* mask = nullptr;        ///< per row: the systems it touches
+  std::vector<int> first, width;              ///< per system: its columns of J
+  std::vector<const double*> dinv;            ///< per system: its block of D^-1
+  std::vector<std::uint8_t> done;             ///< per row: its columns of Y and W formed
+  int rows = 0;
+  int formed = 0;  ///< columns formed since delassus_begin
+
+  void reserve(int capacity, int systems);
+};
+
+/// A new step of `rows` rows: no column formed.
+void delassus_begin(DelassusColumns& d, int rows);
+/// W(:, j) over the step's rows (formed the first time, with Y(:, j)).
+const double* delassus_column(DelassusColumns& d, int j);
+/// Every column not formed yet (then W's first rows x rows block is the whole, symmetric to
+/// rounding).
+void delassus_complete(DelassusColumns& d);
+
 /// row[col0 + k] += s d . (v_k + w_k x p) over the coordinates k that move `body` (its path to the
 /// root, a free base's six): the velocity of the world point p fixed on `body` along the world
 /// direction d. The one point Jacobian every builder uses. body < 0 (the world) adds nothing.

@@ -155,6 +155,7 @@ struct ConstraintReport {
   double bilateral_error = 0;         ///< max |phi| of the bilateral rows after the step
   double penetration = 0;             ///< deepest contact penetration (m, >= 0)
   double limit_violation = 0;         ///< largest excursion beyond a joint limit (>= 0)
+  int delassus_columns = 0;  ///< W's columns the last solve formed (rows: the full product)
 };
 
 /// What a velocity step works on beside the robot: the free bodies' states and free
@@ -266,6 +267,15 @@ class ConstraintSystem final : public AccelerationHook {
   void ground_contacts();
   /// Row r (an outside contact's normal) and its friction rows from last step's contacts.
   void warm_start_external(int r, const Contact& ct);
+  /// row_mask_ of the first `rows` rows (bit s: the row touches system s); true when a row
+  /// touches the robot.
+  bool row_masks(int rows);
+  /// The free bodies' rows of Y_ = D^-1 J^T (by row_mask_).
+  void free_body_inverse_mass_jacobian(int rows);
+  /// Y_ = D^-1 J^T and W_ = J D^-1 J^T of the first `rows` rows (the full product).
+  void delassus(const State& x, int rows);
+  /// lazy_w_ for this step: the columns of Y_ and W_ left to the solver.
+  void lazy_delassus(const State& x, int rows);
 
   const Model& model_;
   ConstraintSpec spec_;
@@ -308,6 +318,7 @@ class ConstraintSystem final : public AccelerationHook {
   VecX c_, p_;
   std::vector<std::uint64_t> row_mask_;  ///< per row: bit s set when it touches system s
   DelassusWorkspace delassus_ws_;        ///< robot_delassus's
+  DelassusColumns lazy_w_;               ///< W_'s columns on demand (the active set's)
   std::vector<Vec3> warm_contact_;       ///< last impulses (n, t1, t2) per contact sphere
   /// Contacts from outside (the collision layer) have no identity across steps: the last
   /// step's are kept with their world impulse, and a new contact of the same object pair takes

@@ -17,7 +17,14 @@
 //     which direction), solve the linear system of the active rows exactly (LU with partial
 //     pivoting, a relative regularization `regularization` W_ii on the diagonal for redundant
 //     contacts), update the guess from the signs it violates, repeat; then a few PGS sweeps
-//     from the result make it feasible to rounding. Exact on stacks where PGS is soft.
+//     from the result make it feasible to rounding. Exact on stacks where PGS is soft. When
+//     the guess returns to the one of two updates before (a contact flipping on and off, or
+//     between sticking and sliding, while another flips back), the flipping rows keep their
+//     new guess and the others go on; the polish then corrects what the frozen rows violate.
+//     It reads W by columns, and only those of the rows that carry impulse (W symmetric:
+//     r = c + sum over those rows j of W(:, j) p_j); on W's lazy columns (DelassusColumns,
+//     constraint.h) it forms just those, so a problem whose contacts mostly carry no load (a
+//     robot's feet with their hulls' near contacts) skips most of the product J D^-1 J^T.
 // The workspace is sized once (reserve); the solvers allocate nothing afterwards.
 #pragma once
 
@@ -45,6 +52,7 @@ struct SolverStats {
   int rank = 0;           ///< solve_equality: numerical rank
   bool singular = false;  ///< solve_equality took the pseudo-inverse
   bool fallback = false;  ///< solve_active_set did not settle: PGS from the warm start solved it
+  int columns = 0;        ///< W's columns formed (lazy columns) or given (the full product)
 };
 
 /// What the solvers keep between calls (sized for at most `capacity` rows).
@@ -58,6 +66,8 @@ struct SolverWorkspace {
   std::vector<int> slot;             ///< per row: its column in the active-set system (or -1)
   std::vector<int> state;            ///< per row: the active-set guess
   std::vector<Eigen::Vector2d> dir;  ///< per normal row: the sliding direction
+  std::vector<int> state1, state2;   ///< active-set: the guesses one and two updates back
+  std::vector<std::uint8_t> frozen;  ///< active-set: rows whose guess a two-cycle froze
   int equality_size = -1;
   void reserve(int capacity, int equality_rows);
 };
@@ -73,6 +83,18 @@ SolverStats solve_pgs(const MatX& W, const VecX& c, const ConstraintRows& rows, 
 /// The active-set (Newton-type) solver, same arguments; p is its first guess (warm start).
 SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows& rows, VecX& p,
                              SolverWorkspace& ws, const SolverOptions& opt);
+/// The same on W's lazy columns (W.Y, W.diag and W.done set up by delassus_begin): the columns
+/// of the rows that start active, then of those the solver activates. When more than half the
+/// rows start active (lazy_columns_pay), and before a fall-back to PGS, every column is formed
+/// and the solve is the one above on the whole W.
+SolverStats solve_active_set(DelassusColumns& W, const VecX& c, const ConstraintRows& rows, VecX& p,
+                             SolverWorkspace& ws, const SolverOptions& opt);
+/// The rows that the active set's first guess makes active (a unilateral row with warm impulse
+/// or a free residual below -1e-9 m/s, with its friction rows; every equality row): the
+/// columns its first system needs.
+int starting_active_rows(const VecX& c, const ConstraintRows& rows, const VecX& p);
+/// Whether forming W's columns on demand pays: at most half the rows start active.
+bool lazy_columns_pay(const VecX& c, const ConstraintRows& rows, const VecX& p);
 
 enum class ContactSolver { PGS, ActiveSet };
 /// "pgs" or "active_set" (std::invalid_argument otherwise).

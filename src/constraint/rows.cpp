@@ -137,6 +137,50 @@ void robot_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const Mat
   }
 }
 
+void DelassusColumns::reserve(int capacity, int systems) {
+  first.assign(systems, 0);
+  width.assign(systems, 0);
+  dinv.assign(systems, nullptr);
+  done.assign(capacity, 0);
+}
+
+void delassus_begin(DelassusColumns& d, int rows) {
+  d.rows = rows;
+  d.formed = 0;
+  std::fill(d.done.begin(), d.done.begin() + rows, 0);
+}
+
+const double* delassus_column(DelassusColumns& d, int j) {
+  MatX& W = *d.W;
+  if (d.done[j]) return &W(0, j);
+  const int n = d.rows;
+  const double* jr = d.J->row(j).data();
+  auto y = d.Y->col(j);
+  auto w = W.col(j).head(n);
+  y.setZero();
+  w.setZero();
+  for (std::uint64_t m = d.mask[j]; m; m &= m - 1) {
+    const int s = __builtin_ctzll(m), c0 = d.first[s], ws = d.width[s];
+    // Y(s, j) = D^-1_s J(j, s)^T over the row's non-zero entries (D^-1 symmetric: its column a
+    // is its row a), then W(:, j) += J(:, s) Y(s, j).
+    double* ys = y.data() + c0;
+    for (int a = 0; a < ws; ++a) {
+      if (jr[c0 + a] == 0) continue;
+      const double* col = d.dinv[s] + static_cast<std::ptrdiff_t>(a) * ws;
+      const double v = jr[c0 + a];
+      for (int i = 0; i < ws; ++i) ys[i] += v * col[i];
+    }
+    w.noalias() += d.J->block(0, c0, n, ws) * y.segment(c0, ws);
+  }
+  d.done[j] = 1;
+  ++d.formed;
+  return &W(0, j);
+}
+
+void delassus_complete(DelassusColumns& d) {
+  for (int j = 0; j < d.rows; ++j) delassus_column(d, j);
+}
+
 void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,
                     double* row) {
   if (body < 0 || !sys.model) return;

@@ -290,6 +290,13 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   vfree_ = VecX::Zero(nv_total_);
   row_mask_.assign(max_rows_, 0);
   delassus_ws_.reserve(model_.nv, max_rows_);
+  const int nsys = 1 + static_cast<int>(free_.size());
+  lazy_w_.reserve(max_rows_, nsys);
+  lazy_w_.width[0] = model_.nv;
+  for (int j = 1; j < nsys; ++j) {
+    lazy_w_.first[j] = model_.nv + 6 * (j - 1);
+    lazy_w_.width[j] = 6;
+  }
   one_contact_.assign(1, Contact{});
   warm_ext_.assign(std::max(0, max_external_contacts), WarmExternal{});
   warm_ext_next_.assign(warm_ext_.size(), WarmExternal{});
@@ -619,6 +626,99 @@ void ConstraintSystem::warm_start_external(int r, const Contact& ct) {
   p_[r] = std::max(0.0, from->impulse.dot(ct.normal));
 }
 
+bool ConstraintSystem::row_masks(int rows) {
+  const int nvr = model_.nv;
+  const int nsys = 1 + static_cast<int>(free_.size());
+  auto J = rows_.J.topRows(rows);
+  bool robot_rows = false;
+  for (int r = 0; r < rows; ++r) {
+    std::uint64_t mask = 0;
+    if (nvr > 0 && !J.row(r).head(nvr).isZero(0)) mask |= 1;
+    for (int j = 1; j < nsys; ++j) {
+      if (!J.row(r).segment<6>(nvr + 6 * (j - 1)).isZero(0)) mask |= std::uint64_t(1) << j;
+    }
+    row_mask_[r] = mask;
+    robot_rows = robot_rows || (mask & 1);
+  }
+  return robot_rows;
+}
+
+void ConstraintSystem::free_body_inverse_mass_jacobian(int rows) {
+  const int nvr = model_.nv;
+  auto J = rows_.J.topRows(rows);
+  for (size_t j = 1; j <= free_.size(); ++j) {
+    const int c0 = nvr + 6 * static_cast<int>(j - 1);
+    const Mat6& Mi = free_[j - 1].Minv;
+    for (int r = 0; r < rows; ++r) {
+      if (row_mask_[r] >> j & 1) {
+        Y_.col(r).segment<6>(c0).noalias() = Mi * J.row(r).segment<6>(c0).transpose();
+      } else {
+        Y_.col(r).segment<6>(c0).setZero();
+      }
+    }
+  }
+}
+
+void ConstraintSystem::lazy_delassus(const State& x, int rows) {
+  lazy_w_.dinv[0] = row_masks(rows) ? minv(model_, data_, x.base, x.q).data() : nullptr;
+  for (size_t j = 0; j < free_.size(); ++j) lazy_w_.dinv[j + 1] = free_[j].Minv.data();
+  lazy_w_.J = &rows_.J;
+  lazy_w_.Y = &Y_;
+  lazy_w_.W = &W_;
+  lazy_w_.mask = row_mask_.data();
+  delassus_begin(lazy_w_, rows);
+}
+
+void ConstraintSystem::delassus(const State& x, int rows) {
+  const Model& m = model_;
+  const int nvr = m.nv;
+  auto J = rows_.J.topRows(rows);
+  auto Y = Y_.leftCols(rows);
+  const int nsys = 1 + static_cast<int>(free_.size());
+  if (nsys > 64) {  // dense (a mask per row holds 64 systems)
+    const MatX& Minv = minv(m, data_, x.base, x.q);
+    robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
+    for (size_t j = 0; j < free_.size(); ++j) {
+      const int c0 = nvr + 6 * static_cast<int>(j);
+      Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
+    }
+    auto W = W_.topLeftCorner(rows, rows);
+    W.triangularView<Eigen::Lower>() += J.rightCols(J.cols() - nvr) * Y.bottomRows(Y.rows() - nvr);
+  } else {
+    // Block-sparse: a contact row touches at most two systems (the robot, free bodies), and
+    // D^-1 is block-diagonal by system, so W(r, s) sums only over the systems both rows
+    // touch (box_stack: a quarter of the dense product's multiply-adds).
+    const bool robot_rows = row_masks(rows);
+    if (robot_rows) {
+      const MatX& Minv = minv(m, data_, x.base, x.q);
+      robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
+    } else {
+      Y.topRows(nvr).setZero();
+    }
+    free_body_inverse_mass_jacobian(rows);
+    // W's robot block is robot_delassus's; the free bodies' blocks are added by their masks.
+    for (int r = 0; r < rows; ++r) {
+      const std::uint64_t mr = row_mask_[r] & ~std::uint64_t(1);
+      if (!mr && robot_rows) continue;
+      for (int q = 0; q <= r; ++q) {
+        std::uint64_t both = mr & row_mask_[q];
+        double w = 0;
+        while (both) {
+          const int j = __builtin_ctzll(both);
+          both &= both - 1;
+          const int c0 = nvr + 6 * (j - 1);
+          w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
+        }
+        W_(r, q) = robot_rows ? W_(r, q) + w : w;
+      }
+    }
+  }
+  // W is symmetric: the lower triangle computed, the upper copied.
+  for (int j = 1; j < rows; ++j) {
+    for (int i = 0; i < j; ++i) W_(i, j) = W_(j, i);
+  }
+}
+
 bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, const StepInput& in) {
   const Model& m = model_;
   const int nvr = m.nv;
@@ -667,80 +767,35 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   int it = 0;
   double change = 0;
   if (rows > 0) {
-    auto J = rows_.J.topRows(rows);
-    auto Y = Y_.leftCols(rows);
-    const int nsys = 1 + static_cast<int>(free_.size());
-    if (nsys > 64) {  // dense (a mask per row holds 64 systems)
-      const MatX& Minv = minv(m, data_, x.base, x.q);
-      robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
-      for (size_t j = 0; j < free_.size(); ++j) {
-        const int c0 = nvr + 6 * static_cast<int>(j);
-        Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
-      }
-      auto W = W_.topLeftCorner(rows, rows);
-      W.triangularView<Eigen::Lower>() +=
-          J.rightCols(J.cols() - nvr) * Y.bottomRows(Y.rows() - nvr);
-    } else {
-      // Block-sparse: a contact row touches at most two systems (the robot, free bodies), and
-      // D^-1 is block-diagonal by system, so W(r, s) sums only over the systems both rows
-      // touch (box_stack: a quarter of the dense product's multiply-adds).
-      for (int r = 0; r < rows; ++r) {
-        std::uint64_t mask = 0;
-        if (nvr > 0 && !J.row(r).head(nvr).isZero(0)) mask |= 1;
-        for (int j = 1; j < nsys; ++j) {
-          if (!J.row(r).segment<6>(nvr + 6 * (j - 1)).isZero(0)) mask |= std::uint64_t(1) << j;
-        }
-        row_mask_[r] = mask;
-      }
-      const bool robot_rows = nvr > 0 && std::any_of(row_mask_.begin(), row_mask_.begin() + rows,
-                                                     [](std::uint64_t k) { return k & 1; });
-      if (robot_rows) {
-        const MatX& Minv = minv(m, data_, x.base, x.q);
-        robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
-      } else {
-        Y.topRows(nvr).setZero();
-      }
-      for (int j = 1; j < nsys; ++j) {
-        const int c0 = nvr + 6 * (j - 1);
-        const Mat6& Mi = free_[j - 1].Minv;
-        for (int r = 0; r < rows; ++r) {
-          if (row_mask_[r] >> j & 1) {
-            Y.col(r).segment<6>(c0).noalias() = Mi * J.row(r).segment<6>(c0).transpose();
-          } else {
-            Y.col(r).segment<6>(c0).setZero();
-          }
-        }
-      }
-      // W's robot block is robot_delassus's; the free bodies' blocks are added by their masks.
-      for (int r = 0; r < rows; ++r) {
-        const std::uint64_t mr = row_mask_[r] & ~std::uint64_t(1);
-        if (!mr && robot_rows) continue;
-        for (int q = 0; q <= r; ++q) {
-          std::uint64_t both = mr & row_mask_[q];
-          double w = 0;
-          while (both) {
-            const int j = __builtin_ctzll(both);
-            both &= both - 1;
-            const int c0 = nvr + 6 * (j - 1);
-            w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
-          }
-          W_(r, q) = robot_rows ? W_(r, q) + w : w;
-        }
-      }
-    }
-    // W is symmetric: the lower triangle computed, the upper copied.
-    for (int j = 1; j < rows; ++j) {
-      for (int i = 0; i < j; ++i) W_(i, j) = W_(j, i);
-    }
     auto c = c_.head(rows);
-    c.noalias() = J * vfree_;
+    c.noalias() = rows_.J.topRows(rows) * vfree_;
     c -= rows_.b.head(rows);
-    const SolverStats st = opt_.solver == ContactSolver::ActiveSet
-                               ? solve_active_set(W_, c_, rows_, p_, ws_, solver_opt_)
-                               : solve_pgs(W_, c_, rows_, p_, solver_opt_);
+    SolverStats st;
+    // The active set reads only the columns of W of the rows that carry impulse: when at most
+    // half the rows start active, W's columns are formed as it asks for them.
+    const bool lazy = opt_.solver == ContactSolver::ActiveSet && free_.size() < 64 &&
+                      lazy_columns_pay(c_, rows_, p_);
+    if (lazy) {
+      lazy_delassus(x, rows);
+      st = solve_active_set(lazy_w_, c_, rows_, p_, ws_, solver_opt_);
+      // v+ = v* + D^-1 J^T p over the rows with impulse (their columns of Y are formed: the
+      // solver read them; delassus_column returns at once).
+      for (int r = 0; r < rows; ++r) {
+        if (p_[r] == 0) continue;
+        delassus_column(lazy_w_, r);
+        vfree_.noalias() += p_[r] * Y_.col(r);
+      }
+    } else {
+      delassus(x, rows);
+      st = opt_.solver == ContactSolver::ActiveSet
+               ? solve_active_set(W_, c_, rows_, p_, ws_, solver_opt_)
+               : solve_pgs(W_, c_, rows_, p_, solver_opt_);
+      st.columns = rows;
+      vfree_.noalias() += Y_.leftCols(rows) * p_.head(rows);
+    }
     it = st.iterations;
     change = st.change;
-    vfree_.noalias() += Y * p_.head(rows);
+    report_.delassus_columns = st.columns;
   }
   x.v = vfree_.head(nvr);
   for (size_t j = 0; j < free_.size(); ++j) (*in.bodies)[j].v = vfree_.segment<6>(nvr + 6 * j);

@@ -86,6 +86,9 @@ void SolverWorkspace::reserve(int capacity, int equality_rows) {
   slot.assign(capacity, -1);
   state.assign(capacity, kInactive);
   dir.assign(capacity, Eigen::Vector2d::Zero());
+  state1.assign(capacity, kInactive);
+  state2.assign(capacity, kInactive);
+  frozen.assign(capacity, 0);
 }
 
 SolverStats solve_equality(const MatX& W, const VecX& rhs, VecX& x, SolverWorkspace& ws,
@@ -166,74 +169,236 @@ SolverStats solve_pgs(const MatX& W, const VecX& c, const ConstraintRows& rows, 
   return st;
 }
 
-SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows& rows, VecX& p,
-                             SolverWorkspace& ws, const SolverOptions& opt) {
+namespace {
+
+constexpr double kVelTol = 1e-9;   // m/s: residuals below this count as zero
+constexpr double kImpTol = 1e-12;  // N s
+// A sliding direction within this of the one the slip asks for has settled: on panda_push the
+// directions of two sliding corners converge at a rate near 1 (the slip follows the friction
+// direction), 1e-9 took more than the 30 updates where 1e-6 is reached within them.
+constexpr double kDirTol = 1e-6;
+
+// W read by columns, all of them there (the full product)...
+struct DenseColumns {
+  static constexpr bool kLazy = false;
+  const MatX& W;
+  const double* col(int j) const { return &W(0, j); }
+  double diag(int j) const { return W(j, j); }
+};
+// ... or formed the first time the solver asks for one (W_jj with its column).
+struct LazyColumns {
+  static constexpr bool kLazy = true;
+  DelassusColumns& D;
+  const double* col(int j) { return delassus_column(D, j); }
+  double diag(int j) { return delassus_column(D, j)[j]; }
+};
+
+// r += s w over the first n entries.
+void axpy(const double* w, double s, int n, double* r) {
+  for (int i = 0; i < n; ++i) r[i] += s * w[i];
+}
+
+bool starts_active(const VecX& c, const VecX& p, int r) {
+  return p[r] > 0 || c[r] < -kVelTol;
+}
+
+// r = c + W p over the first n rows from the columns of the rows that carry impulse (W is
+// symmetric: a row without impulse needs no column, not even for its own residual).
+template <class Cols>
+void residuals(Cols& W, const VecX& c, const VecX& p, int n, VecX& r) {
+  for (int i = 0; i < n; ++i) r[i] = c[i];
+  for (int j = 0; j < n; ++j) {
+    if (p[j] != 0) axpy(W.col(j), p[j], n, r.data());
+  }
+}
+
+// Projected Gauss-Seidel sweeps as solve_pgs (the same updates in the same order), on the
+// residuals r = c + W p kept up to date: a row whose impulse changes by d adds d W(:, row) to r.
+// On lazy columns a row that stays at zero (a separated contact: p = 0, r >= 0, and its
+// friction without load) reads only its r: neither its column nor its pivot W_kk.
+template <class Cols>
+SolverStats pgs_on_residuals(Cols& W, const ConstraintRows& rows, VecX& p, VecX& r,
+                             const SolverOptions& opt) {
   SolverStats st;
   const int n = rows.count;
-  if (n == 0) return st;
-  if (static_cast<int>(ws.state.size()) < n) {
-    throw std::length_error("solve_active_set: workspace smaller than the rows");
+  double* res = r.data();
+  auto move = [&](int row, double np) {
+    const double d = np - p[row];
+    p[row] = np;
+    if (d != 0) axpy(W.col(row), d, n, res);
+    return std::abs(d);
+  };
+  int it = 0;
+  double change = 0;
+  for (it = 1; it <= opt.iterations; ++it) {
+    change = 0;
+    for (int k = 0; k < n; ++k) {
+      const RowType t = rows.type[k];
+      if (t == RowType::ContactFriction) continue;  // with its normal, below
+      const bool stays = Cols::kLazy && t != RowType::Equality && p[k] == 0 && res[k] >= 0;
+      const double wkk = stays ? 0.0 : W.diag(k);
+      if (wkk > kTinyPivot) {
+        double np = p[k] - res[k] / wkk;
+        if (t != RowType::Equality) np = std::max(0.0, np);
+        change = std::max(change, move(k, np));
+      }
+      const int f1 = rows.friction[k], f2 = rows.friction2[k];
+      if (f1 == ConstraintRows::kNone) continue;
+      if (Cols::kLazy && p[k] == 0 && p[f1] == 0 && p[f2] == 0) continue;  // radius 0: they stay
+      const double w1 = W.diag(f1), w2 = W.diag(f2);
+      double n1 = w1 > kTinyPivot ? p[f1] - res[f1] / w1 : 0.0;
+      double n2 = w2 > kTinyPivot ? p[f2] - res[f2] / w2 : 0.0;
+      const double lim = rows.mu[k] * p[k];
+      const double len = std::hypot(n1, n2);
+      if (len > lim) {
+        const double s = len > 0 ? lim / len : 0.0;
+        n1 *= s;
+        n2 *= s;
+      }
+      change = std::max(change, move(f1, n1));
+      change = std::max(change, move(f2, n2));
+    }
+    if (change <= opt.tol) break;
   }
-  constexpr double kVelTol = 1e-9;              // m/s: residuals below this count as zero
-  constexpr double kImpTol = 1e-12;             // N s
-  for (int r = 0; r < n; ++r) ws.p0[r] = p[r];  // the warm start, for the fallback below
-  bool converged = false;
-  // First guess from the warm start (or, without one, from the free residual).
-  for (int r = 0; r < n; ++r) {
+  st.iterations = std::min(it, opt.iterations);
+  st.change = change;
+  return st;
+}
+
+// The first guess from the warm start (or, without one, from the free residual).
+void first_guess(const VecX& c, const ConstraintRows& rows, const VecX& p, SolverWorkspace& ws) {
+  for (int r = 0; r < rows.count; ++r) {
+    if (!unilateral(rows.type[r])) continue;
+    ws.state[r] = kInactive;
+    if (!starts_active(c, p, r)) continue;
+    ws.state[r] = kStick;
+    const int f1 = rows.friction[r];
+    if (f1 != ConstraintRows::kNone && p[r] > 0) {
+      const Eigen::Vector2d pt(p[f1], p[rows.friction2[r]]);
+      if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) && pt.norm() > 0) {
+        ws.state[r] = kSlide;
+        ws.dir[r] = pt.normalized();
+      }
+    }
+  }
+}
+
+// The active set's unknowns: equality rows, active limits and normals, sticking contacts'
+// friction rows (their count).
+int active_variables(const ConstraintRows& rows, SolverWorkspace& ws) {
+  int m = 0;
+  for (int r = 0; r < rows.count; ++r) ws.slot[r] = -1;
+  for (int r = 0; r < rows.count; ++r) {
     const RowType t = rows.type[r];
-    if (!unilateral(t)) continue;
-    if (p[r] > 0 || c[r] < -kVelTol) {
-      ws.state[r] = kStick;
-      const int f1 = rows.friction[r];
-      if (f1 != ConstraintRows::kNone && p[r] > 0) {
-        const Eigen::Vector2d pt(p[f1], p[rows.friction2[r]]);
-        if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) && pt.norm() > 0) {
-          ws.state[r] = kSlide;
-          ws.dir[r] = pt.normalized();
-        }
+    if (t == RowType::ContactFriction) continue;
+    if (t != RowType::Equality && ws.state[r] == kInactive) continue;
+    ws.slot[r] = m;
+    ws.var[m++] = r;
+    if (t == RowType::ContactNormal && ws.state[r] == kStick &&
+        rows.friction[r] != ConstraintRows::kNone) {
+      ws.slot[rows.friction[r]] = m;
+      ws.var[m++] = rows.friction[r];
+      ws.slot[rows.friction2[r]] = m;
+      ws.var[m++] = rows.friction2[r];
+    }
+  }
+  return m;
+}
+
+// The guess's linear system in ws.A and ws.x: column by column (W symmetric: W(ri, rj) =
+// W(rj, ri), read down column rj).
+template <class Cols>
+void active_system(Cols& W, const VecX& c, const ConstraintRows& rows, int m, SolverWorkspace& ws,
+                   double regularization) {
+  for (int j = 0; j < m; ++j) {
+    const int rj = ws.var[j];
+    double* a = &ws.A(0, j);
+    const double* wj = W.col(rj);
+    for (int i = 0; i < m; ++i) a[i] = wj[ws.var[i]];
+    if (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal) {
+      const Eigen::Vector2d& d = ws.dir[rj];
+      const double s1 = rows.mu[rj] * d[0], s2 = rows.mu[rj] * d[1];
+      const double* w1 = W.col(rows.friction[rj]);
+      const double* w2 = W.col(rows.friction2[rj]);
+      for (int i = 0; i < m; ++i) a[i] += s1 * w1[ws.var[i]] + s2 * w2[ws.var[i]];
+    }
+    a[j] += regularization * W.diag(rj) + 1e-300;
+    ws.x[j] = -c[rj];
+  }
+}
+
+// Updates the guess from the signs that p and the residuals ws.r violate; true when it changed.
+bool update_guess(const ConstraintRows& rows, const VecX& p, SolverWorkspace& ws) {
+  bool changed = false;
+  for (int r = 0; r < rows.count; ++r) {
+    if (!unilateral(rows.type[r]) || ws.frozen[r]) continue;
+    int& s = ws.state[r];
+    if (s != kInactive && p[r] < -kImpTol) {
+      s = kInactive;
+      changed = true;
+      continue;
+    }
+    if (s == kInactive) {
+      if (ws.r[r] < -kVelTol) s = kStick, changed = true;
+      continue;
+    }
+    const int f1 = rows.friction[r];
+    if (f1 == ConstraintRows::kNone) continue;
+    const int f2 = rows.friction2[r];
+    if (s == kStick) {
+      const Eigen::Vector2d pt(p[f1], p[f2]);
+      if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) + kImpTol) {
+        s = kSlide;
+        ws.dir[r] = pt.normalized();
+        changed = true;
       }
     } else {
-      ws.state[r] = kInactive;
+      const Eigen::Vector2d rt(ws.r[f1], ws.r[f2]);
+      if (rt.norm() <= kVelTol) continue;
+      const Eigen::Vector2d want = -rt / rt.norm();  // friction opposes the slip
+      if (want.dot(ws.dir[r]) < 0) {
+        s = kStick;
+        changed = true;
+      } else if ((want - ws.dir[r]).norm() > kDirTol) {
+        ws.dir[r] = (ws.dir[r] + want).normalized();
+        changed = true;
+      }
     }
   }
+  return changed;
+}
+
+// The two-cycle: the new guess differs from the one just solved but is the one of the update
+// before. Its flipping rows (those the update changed) keep the new guess from then on.
+void freeze_two_cycle(const ConstraintRows& rows, SolverWorkspace& ws) {
+  bool back = true, moved = false;
+  for (int r = 0; r < rows.count && back; ++r) {
+    if (!unilateral(rows.type[r])) continue;
+    back = ws.state[r] == ws.state2[r];
+    moved = moved || ws.state[r] != ws.state1[r];
+  }
+  if (!back || !moved) return;
+  for (int r = 0; r < rows.count; ++r) {
+    if (unilateral(rows.type[r]) && ws.state[r] != ws.state1[r]) ws.frozen[r] = 1;
+  }
+}
+
+// The active-set updates from the first guess; true when a guess settled (p solves its system
+// and ws.r = c + W p). st.iterations counts the updates.
+template <class Cols>
+bool active_set_updates(Cols& W, const VecX& c, const ConstraintRows& rows, VecX& p,
+                        SolverWorkspace& ws, const SolverOptions& opt, SolverStats& st) {
+  const int n = rows.count;
+  first_guess(c, rows, p, ws);
+  for (int r = 0; r < n; ++r) ws.frozen[r] = 0;
+  bool converged = false;
   int it = 0;
   for (it = 1; it <= opt.active_set_iterations; ++it) {
-    // Unknowns: equality rows, active limits and normals, sticking contacts' friction rows.
-    int m = 0;
-    for (int r = 0; r < n; ++r) ws.slot[r] = -1;
-    for (int r = 0; r < n; ++r) {
-      const RowType t = rows.type[r];
-      if (t == RowType::ContactFriction) continue;
-      if (t != RowType::Equality && ws.state[r] == kInactive) continue;
-      ws.slot[r] = m;
-      ws.var[m++] = r;
-      if (t == RowType::ContactNormal && ws.state[r] == kStick &&
-          rows.friction[r] != ConstraintRows::kNone) {
-        ws.slot[rows.friction[r]] = m;
-        ws.var[m++] = rows.friction[r];
-        ws.slot[rows.friction2[r]] = m;
-        ws.var[m++] = rows.friction2[r];
-      }
-    }
-    // Column by column (W symmetric: W(ri, rj) = W(rj, ri), read down column rj).
-    for (int j = 0; j < m; ++j) {
-      const int rj = ws.var[j];
-      double* a = &ws.A(0, j);
-      const double* wj = &W(0, rj);
-      for (int i = 0; i < m; ++i) a[i] = wj[ws.var[i]];
-      if (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal) {
-        const Eigen::Vector2d& d = ws.dir[rj];
-        const double s1 = rows.mu[rj] * d[0], s2 = rows.mu[rj] * d[1];
-        const double* w1 = &W(0, rows.friction[rj]);
-        const double* w2 = &W(0, rows.friction2[rj]);
-        for (int i = 0; i < m; ++i) a[i] += s1 * w1[ws.var[i]] + s2 * w2[ws.var[i]];
-      }
-      a[j] += opt.regularization * W(rj, rj) + 1e-300;
-      ws.x[j] = -c[rj];
-    }
+    const int m = active_variables(rows, ws);
+    active_system(W, c, rows, m, ws, opt.regularization);
     // LU, not Cholesky, also when no contact slides: on panda_push the Cholesky solution of the
     // same (nearly singular) system sent the box flying (110 m in 2 s) where LU's does not.
-    if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // the fallback below
+    if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // the caller's fallback
     for (int r = 0; r < n; ++r) p[r] = 0;
     for (int i = 0; i < m; ++i) p[ws.var[i]] = ws.x[i];
     for (int r = 0; r < n; ++r) {
@@ -243,65 +408,96 @@ SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows&
         p[rows.friction2[r]] = ft * ws.dir[r][1];
       }
     }
-    for (int r = 0; r < n; ++r) ws.r[r] = c[r] + row_dot(W, r, n, p);
-    bool changed = false;
-    for (int r = 0; r < n; ++r) {
-      const RowType t = rows.type[r];
-      if (!unilateral(t)) continue;
-      int& s = ws.state[r];
-      if (s != kInactive && p[r] < -kImpTol) {
-        s = kInactive;
-        changed = true;
-        continue;
-      }
-      if (s == kInactive) {
-        if (ws.r[r] < -kVelTol) s = kStick, changed = true;
-        continue;
-      }
-      const int f1 = rows.friction[r];
-      if (f1 == ConstraintRows::kNone) continue;
-      const int f2 = rows.friction2[r];
-      if (s == kStick) {
-        const Eigen::Vector2d pt(p[f1], p[f2]);
-        if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) + kImpTol) {
-          s = kSlide;
-          ws.dir[r] = pt.normalized();
-          changed = true;
-        }
-      } else {
-        const Eigen::Vector2d rt(ws.r[f1], ws.r[f2]);
-        if (rt.norm() <= kVelTol) continue;
-        const Eigen::Vector2d want = -rt / rt.norm();  // friction opposes the slip
-        if (want.dot(ws.dir[r]) < 0) {
-          s = kStick;
-          changed = true;
-        } else if ((want - ws.dir[r]).norm() > 1e-9) {
-          ws.dir[r] = (ws.dir[r] + want).normalized();
-          changed = true;
-        }
-      }
-    }
-    if (!changed) {
+    residuals(W, c, p, n, ws.r);
+    for (int r = 0; r < n; ++r) ws.state1[r] = ws.state[r];  // the guess just solved
+    if (!update_guess(rows, p, ws)) {
       converged = true;
       break;
     }
+    if (it >= 2) freeze_two_cycle(rows, ws);
+    for (int r = 0; r < n; ++r) ws.state2[r] = ws.state1[r];
   }
   st.iterations = std::min(it, opt.active_set_iterations);
   for (int r = 0; r < n && converged; ++r) converged = std::isfinite(p[r]);
-  // Guesses that never settled (a sliding contact's direction cycling, a singular system) leave
-  // an iterate that is not a solution: sliding boxes on a stack were thrown kilometres. Then
-  // projected Gauss-Seidel from the warm start with its full sweeps solves the step instead;
-  // otherwise a few sweeps from the direct solution make it feasible to rounding.
+  return converged;
+}
+
+void check_workspace(const ConstraintRows& rows, const SolverWorkspace& ws) {
+  if (static_cast<int>(ws.state.size()) < rows.count) {
+    throw std::length_error("solve_active_set: workspace smaller than the rows");
+  }
+}
+
+}  // namespace
+
+// Guesses that never settle (a sliding contact's direction cycling, a singular system) leave an
+// iterate that is not a solution: sliding boxes on a stack were thrown kilometres. Then
+// projected Gauss-Seidel from the warm start with its full sweeps solves the step instead;
+// otherwise a few sweeps from the direct solution make it feasible to rounding.
+SolverStats solve_active_set(const MatX& W, const VecX& c, const ConstraintRows& rows, VecX& p,
+                             SolverWorkspace& ws, const SolverOptions& opt) {
+  SolverStats st;
+  const int n = rows.count;
+  if (n == 0) return st;
+  check_workspace(rows, ws);
+  st.columns = n;
+  for (int r = 0; r < n; ++r) ws.p0[r] = p[r];  // the warm start, for the fallback
+  DenseColumns cols{W};
   SolverOptions polish = opt;
-  if (converged) {
-    polish.iterations = std::max(1, opt.polish_sweeps);
+  polish.iterations = std::max(1, opt.polish_sweeps);
+  if (active_set_updates(cols, c, rows, p, ws, opt, st)) {
+    st.change = pgs_on_residuals(cols, rows, p, ws.r, polish).change;
+    return st;
+  }
+  for (int r = 0; r < n; ++r) p[r] = ws.p0[r];
+  st.fallback = true;
+  st.change = solve_pgs(W, c, rows, p, opt).change;
+  return st;
+}
+
+SolverStats solve_active_set(DelassusColumns& W, const VecX& c, const ConstraintRows& rows, VecX& p,
+                             SolverWorkspace& ws, const SolverOptions& opt) {
+  const int n = rows.count;
+  if (n == 0) return SolverStats{};
+  check_workspace(rows, ws);
+  if (!lazy_columns_pay(c, rows, p)) {
+    delassus_complete(W);
+    SolverStats st = solve_active_set(*W.W, c, rows, p, ws, opt);
+    st.columns = W.formed;
+    return st;
+  }
+  SolverStats st;
+  for (int r = 0; r < n; ++r) ws.p0[r] = p[r];
+  LazyColumns cols{W};
+  SolverOptions polish = opt;
+  polish.iterations = std::max(1, opt.polish_sweeps);
+  if (active_set_updates(cols, c, rows, p, ws, opt, st)) {
+    st.change = pgs_on_residuals(cols, rows, p, ws.r, polish).change;
   } else {
+    delassus_complete(W);
     for (int r = 0; r < n; ++r) p[r] = ws.p0[r];
     st.fallback = true;
+    st.change = solve_pgs(*W.W, c, rows, p, opt).change;
   }
-  const SolverStats ps = solve_pgs(W, c, rows, p, polish);
-  st.change = ps.change;
+  st.columns = W.formed;
   return st;
+}
+
+int starting_active_rows(const VecX& c, const ConstraintRows& rows, const VecX& p) {
+  int active = 0;
+  for (int r = 0; r < rows.count; ++r) {
+    const RowType t = rows.type[r];
+    if (t == RowType::Equality) {
+      ++active;
+    } else if (unilateral(t) && starts_active(c, p, r)) {
+      active += rows.friction[r] == ConstraintRows::kNone ? 1 : 3;
+    }
+  }
+  return active;
+}
+
+bool lazy_columns_pay(const VecX& c, const ConstraintRows& rows, const VecX& p) {
+  return 2 * starting_active_rows(c, rows, p) <= rows.count;
 }
 
 ContactSolver contact_solver_from_name(const std::string& name) {
