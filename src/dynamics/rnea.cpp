@@ -31,18 +31,30 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
     data.A[0] << 0, 0, 0, ag;
     data.F[0].setZero();
   }
+  // The arrays' data pointers and the base's kind read once: the stores through double* below
+  // would otherwise make GCC reload some of them for every body.
+  const bool fixed = !model.floating;
+  const double* vd = v.data();
+  const double* ad = a.data();
+  const JointModel* joints = model.joints.data();
+  const SE3* Xup = data.Xup.data();
+  const int* parent = model.parent.data();
+  const Inertia* inertia = model.inertia.data();
+  Vec6* Vs = data.V.data();
+  Vec6* As = data.A.data();
+  Vec6* Fs = data.F.data();
   for (int i = 1; i <= model.n; ++i) {
-    const JointModel& jm = model.joints[i];
-    const SE3& X = data.Xup[i];
-    const int p = model.parent[i];
-    const double qd = v[jm.idx_v], qdd = a[jm.idx_v];
-    double* V = data.V[i].data();
-    double* A = data.A[i].data();
-    const Inertia& I = model.inertia[i];
-    double* F = data.F[i].data();
+    const JointModel& jm = joints[i];
+    const SE3& X = Xup[i];
+    const int p = parent[i];
+    const double qd = vd[jm.idx_v], qdd = ad[jm.idx_v];
+    double* V = Vs[i].data();
+    double* A = As[i].data();
+    const Inertia& I = inertia[i];
+    double* F = Fs[i].data();
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
-      if (p == 0 && !model.floating) {
+      if (p == 0 && fixed) {
         // On the fixed base: V_p = 0 and A_p = [0; ag], so V = S qd, V x S qd = 0 and
         // A = [0; R^T ag] + S qdd (the sums below without their zero terms).
         for (int r = 0; r < 6; ++r) V[r] = 0;
@@ -61,8 +73,8 @@ const VecX& rnea(const Model& model, Data& data, const SE3& base, const VecX& q,
         return;
       }
       // (33), (34), (35): V = Ad^-1 V_p + S qd, A = Ad^-1 A_p + V x S qd + S qdd.
-      detail::child_twist(J, X, data.V[p].data(), qd, V);
-      detail::inv_motion<J.form, J.offset>(X, data.A[p].data(), A);
+      detail::child_twist(J, X, Vs[p].data(), qd, V);
+      detail::inv_motion<J.form, J.offset>(X, As[p].data(), A);
       J.add_bias_acceleration(V, qd, A);
       A[k] += qdd;
       // (36), own-body term: F = J A - ad*_V (J V).
