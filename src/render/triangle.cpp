@@ -478,31 +478,16 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
               const float rgb[3], const Target& T, int path);
 constexpr int32_t kMaxExtent = 1 << 14;
 
-// kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
+// draw_triangle once the pixel box [bx0, bx1] x [by0, by1] (not empty, within the image) is
+// known: the edge functions and planes, then the small-triangle path or the pixel loops.
 template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 inline void
-draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t by_, float bz,
-              float bk, int32_t cx_, int32_t cy_, float cz, float ck, const float rgb[3],
-              const Target& T) {
-  const int32_t minx = std::min(ax_, std::min(bx_, cx_)), maxx = std::max(ax_, std::max(bx_, cx_));
-  const int32_t miny = std::min(ay_, std::min(by_, cy_)), maxy = std::max(ay_, std::max(by_, cy_));
-  if (maxx - minx > kMaxExtent || maxy - miny > kMaxExtent) {
-    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kPath);
-    return;
-  }
-  // Pixels whose centre (16 i + 8) lies in [min, max]: arithmetic shifts round down.
-  const int bx0 = std::max(0, (minx + kHalf - 1) >> 4);
-  const int bx1 = std::min(T.W - 1, (maxx - kHalf) >> 4);
-  if (bx0 > bx1) return;
-  const int by0 = std::max(0, (miny + kHalf - 1) >> 4);
-  const int by1 = std::min(T.H - 1, (maxy - kHalf) >> 4);
-  if (by0 > by1) return;
-  if (T.rows.parts > 1 && (by0 >> T.rows.shift) == (by1 >> T.rows.shift) && !T.rows.has(by0)) {
-    return;  // one band, another thread's
-  }
+draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float az, float ak,
+           int32_t bx_, int32_t by_, float bz, float bk, int32_t cx_, int32_t cy_, float cz,
+           float ck, const float rgb[3], const Target& T) {
   const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
   // Relative to the box's first centre.
   const int32_t ax = ax_ - ox, ay = ay_ - oy;
@@ -599,6 +584,35 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   raster_scalar(s, rgb, T);
 }
 
+// kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void
+draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t by_, float bz,
+              float bk, int32_t cx_, int32_t cy_, float cz, float ck, const float rgb[3],
+              const Target& T) {
+  const int32_t minx = std::min(ax_, std::min(bx_, cx_)), maxx = std::max(ax_, std::max(bx_, cx_));
+  const int32_t miny = std::min(ay_, std::min(by_, cy_)), maxy = std::max(ay_, std::max(by_, cy_));
+  if (maxx - minx > kMaxExtent || maxy - miny > kMaxExtent) {
+    draw_any({ax_, ay_, az, ak}, {bx_, by_, bz, bk}, {cx_, cy_, cz, ck}, rgb, T, kPath);
+    return;
+  }
+  // Pixels whose centre (16 i + 8) lies in [min, max]: arithmetic shifts round down.
+  const int bx0 = std::max(0, (minx + kHalf - 1) >> 4);
+  const int bx1 = std::min(T.W - 1, (maxx - kHalf) >> 4);
+  if (bx0 > bx1) return;
+  const int by0 = std::max(0, (miny + kHalf - 1) >> 4);
+  const int by1 = std::min(T.H - 1, (maxy - kHalf) >> 4);
+  if (by0 > by1) return;
+  if (T.rows.parts > 1 && (by0 >> T.rows.shift) == (by1 >> T.rows.shift) && !T.rows.has(by0)) {
+    return;  // one band, another thread's
+  }
+  draw_boxed<kPath>(bx0, by0, bx1, by1, ax_, ay_, az, ak, bx_, by_, bz, bk, cx_, cy_, cz, ck, rgb,
+                    T);
+}
+
 // Draws a triangle of any extent: one larger than 2^14 sub-pixels (1024 pixels: a big image,
 // a near face) is drawn as four, which share their new edges exactly.
 void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
@@ -631,6 +645,32 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
   }
 }
 
+// One triangle of the indexed loop: a vertex outside goes to the clip callback (unless all
+// three are outside one plane), degenerate and culled back faces are dropped, the rest drawn.
+// Returns the triangles counted as drawn.
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline std::size_t
+indexed_one(const VertexArrays& v, uint32_t a, uint32_t b, uint32_t c, const float rgb[3],
+            bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
+  const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
+  if (oa | ob | oc) {
+    if (!(oa & ob & oc) && clip) return clip(ctx, a, b, c);  // rare: clipped in 4-D
+    return 0;
+  }
+  const int32_t ax = v.x[a], ay = v.y[a], bx = v.x[b], by = v.y[b], cx = v.x[c], cy = v.y[c];
+  const int64_t area = int64_t(bx - ax) * (cy - ay) - int64_t(cx - ax) * (by - ay);
+  if (area == 0) return 0;
+  // Screen y runs down: a triangle counter-clockwise as seen has area < 0 here.
+  const bool front = (area < 0) == outward;
+  if (!front && cull) return 0;
+  const float* k = front ? v.kf : v.kb;
+  draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+  return 1;
+}
+
 template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
@@ -639,34 +679,162 @@ inline std::size_t
 indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3], bool cull,
         bool outward, const Target& T, ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
-  const uint32_t* end = t + 3 * count;
-  for (; t < end; t += 3) {
-    const uint32_t a = t[0], b = t[1], c = t[2];
-    const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
-    if (oa | ob | oc) {
-      if (!(oa & ob & oc) && clip) drawn += clip(ctx, a, b, c);  // rare: clipped in 4-D
-      continue;
-    }
-    const int32_t ax = v.x[a], ay = v.y[a], bx = v.x[b], by = v.y[b], cx = v.x[c], cy = v.y[c];
-    const int64_t area = int64_t(bx - ax) * (cy - ay) - int64_t(cx - ax) * (by - ay);
-    if (area == 0) continue;
-    // Screen y runs down: a triangle counter-clockwise as seen has area < 0 here.
-    const bool front = (area < 0) == outward;
-    if (!front && cull) continue;
-    ++drawn;
-    const float* k = front ? v.kf : v.kb;
-    draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+  for (const uint32_t* end = t + 3 * count; t < end; t += 3) {
+    drawn += indexed_one<kPath>(v, t[0], t[1], t[2], rgb, cull, outward, T, clip, ctx);
   }
   return drawn;
 }
 
 #if SE3_RASTER_AVX2
-// The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
+// Edge (x0, y0) -> (x1, y1) as draw_boxed sets it up, eight triangles wide: its value at the
+// origin with the top-left rule folded in (returned) and its steps per pixel ex, ey.
+SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1, __m256i& ex,
+                                  __m256i& ey) {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i dx = _mm256_sub_epi32(x1, x0), dy = _mm256_sub_epi32(y1, y0);
+  const __m256i e = _mm256_sub_epi32(_mm256_mullo_epi32(y0, dx), _mm256_mullo_epi32(x0, dy));
+  const __m256i top_left =
+      _mm256_or_si256(_mm256_cmpgt_epi32(dy, zero),
+                      _mm256_and_si256(_mm256_cmpeq_epi32(dy, zero), _mm256_cmpgt_epi32(zero, dx)));
+  ex = _mm256_slli_epi32(dy, 4);
+  ey = _mm256_sub_epi32(zero, _mm256_slli_epi32(dx, 4));
+  return _mm256_add_epi32(e, _mm256_xor_si256(top_left, _mm256_cmpeq_epi32(zero, zero)));
+}
+
+// The triangle loop for AVX2 with a front end eight triangles wide: the vertices of eight
+// triangles are gathered and their signed areas, culling, pixel boxes and the empty-box and
+// other-band rejections computed in vector lanes, without a branch per triangle (on a detailed
+// mesh most triangles end there: back faces, or boxes without a pixel centre). The survivors
+// go to draw_boxed in their order; triangles with a vertex outside or an extent above
+// kMaxExtent (where 32-bit areas could overflow) take indexed_one. Compiled as one function
+// (VEX encodings, three-operand forms).
 SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t,
                                                            std::size_t count, const float rgb[3],
                                                            bool cull, bool outward, const Target& T,
                                                            ClipCallback clip, void* ctx) {
-  return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
+  std::size_t drawn = 0;
+  const __m256i lane3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
+  const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
+  const __m256i ext = _mm256_set1_epi32(kMaxExtent);
+  // Lanes of front faces: the sign of the area, flipped when clockwise faces out.
+  const __m256i flip = _mm256_set1_epi32(outward ? 0 : -1);
+  const __m256i back_ok = _mm256_set1_epi32(cull ? 0 : -1);
+  const bool bands = T.rows.parts > 1;
+  const __m128i shift = _mm_cvtsi32_si128(T.rows.shift);
+  const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
+  const __m256i part = _mm256_set1_epi32(T.rows.part);
+  const int* xs = v.x;
+  const int* ys = v.y;
+  alignas(32) int32_t box[4][8];
+  std::size_t i = 0;
+  for (; i + 8 <= count; i += 8) {
+    const uint32_t* g = t + 3 * i;
+    unsigned slow = 0;
+    for (int k = 0; k < 8; ++k) {
+      slow |= unsigned((v.out[g[3 * k]] | v.out[g[3 * k + 1]] | v.out[g[3 * k + 2]]) != 0) << k;
+    }
+    const int* gi = reinterpret_cast<const int*>(g);
+    const __m256i ia = _mm256_i32gather_epi32(gi, lane3, 4);
+    const __m256i ib = _mm256_i32gather_epi32(gi + 1, lane3, 4);
+    const __m256i ic = _mm256_i32gather_epi32(gi + 2, lane3, 4);
+    const __m256i ax = _mm256_i32gather_epi32(xs, ia, 4), ay = _mm256_i32gather_epi32(ys, ia, 4);
+    const __m256i bx = _mm256_i32gather_epi32(xs, ib, 4), by = _mm256_i32gather_epi32(ys, ib, 4);
+    const __m256i cx = _mm256_i32gather_epi32(xs, ic, 4), cy = _mm256_i32gather_epi32(ys, ic, 4);
+    const __m256i minx = _mm256_min_epi32(ax, _mm256_min_epi32(bx, cx));
+    const __m256i maxx = _mm256_max_epi32(ax, _mm256_max_epi32(bx, cx));
+    const __m256i miny = _mm256_min_epi32(ay, _mm256_min_epi32(by, cy));
+    const __m256i maxy = _mm256_max_epi32(ay, _mm256_max_epi32(by, cy));
+    const __m256i big = _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(maxx, minx), ext),
+                                        _mm256_cmpgt_epi32(_mm256_sub_epi32(maxy, miny), ext));
+    slow |= unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(big)));
+    // Exact in 32 bits where the extent is at most 2^14 (|area| <= 2^29).
+    const __m256i area =
+        _mm256_sub_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(bx, ax), _mm256_sub_epi32(cy, ay)),
+                         _mm256_mullo_epi32(_mm256_sub_epi32(cx, ax), _mm256_sub_epi32(by, ay)));
+    const __m256i front = _mm256_xor_si256(_mm256_srai_epi32(area, 31), flip);
+    const __m256i counted =
+        _mm256_andnot_si256(_mm256_cmpeq_epi32(area, zero), _mm256_or_si256(front, back_ok));
+    // Pixels whose centre lies in the box (as in draw_triangle).
+    const __m256i bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
+    const __m256i bx1 = _mm256_min_epi32(wmax, _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
+    const __m256i by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
+    const __m256i by1 = _mm256_min_epi32(hmax, _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
+    __m256i empty = _mm256_or_si256(_mm256_cmpgt_epi32(bx0, bx1), _mm256_cmpgt_epi32(by0, by1));
+    if (bands) {  // the box within one band, another thread's
+      const __m256i b0 = _mm256_sra_epi32(by0, shift), b1 = _mm256_sra_epi32(by1, shift);
+      const __m256i other = _mm256_andnot_si256(
+          _mm256_cmpeq_epi32(_mm256_and_si256(b0, part_mask), part), _mm256_cmpeq_epi32(b0, b1));
+      empty = _mm256_or_si256(empty, other);
+    }
+    const unsigned counted_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(counted))) & ~slow;
+    drawn += std::size_t(__builtin_popcount(counted_m));
+    unsigned todo = (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
+    if (!todo) continue;
+    {
+      // Boxes of at most 2 x 2 pixels (most survivors of a detailed mesh): the edge functions
+      // at their centres as draw_boxed computes them (relative to the box's first centre, in
+      // canonical winding, top-left rule folded in); those covering no centre draw nothing.
+      const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
+      const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
+      const __m256i swap = _mm256_cmpgt_epi32(area, zero);
+      const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
+      const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
+      const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
+      const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
+      const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
+      __m256i ex0, ey0, ex1, ey1, ex2, ey2;
+      const __m256i t0 = edge_avx2(px, py, qx, qy, ex0, ey0);
+      const __m256i t1 = edge_avx2(qx, qy, rx, ry, ex1, ey1);
+      const __m256i t2 = edge_avx2(rx, ry, px, py, ex2, ey2);
+      // Sign bit set: the centre is outside.
+      const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), t2);
+      const __m256i c10 =
+          _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
+                          _mm256_add_epi32(t2, ex2));
+      const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
+                    u2 = _mm256_add_epi32(t2, ey2);
+      const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), u2);
+      const __m256i c11 =
+          _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
+                          _mm256_add_epi32(u2, ex2));
+      const __m256i one_col = _mm256_cmpeq_epi32(bx0, bx1), one_row = _mm256_cmpeq_epi32(by0, by1);
+      const __m256i none = _mm256_and_si256(
+          _mm256_and_si256(c00, _mm256_or_si256(c10, one_col)),
+          _mm256_and_si256(_mm256_or_si256(c01, one_row),
+                           _mm256_or_si256(c11, _mm256_or_si256(one_col, one_row))));
+      const __m256i one = _mm256_set1_epi32(1);
+      const __m256i tiny =
+          _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
+                                              _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
+                              none);
+      todo &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
+      if (!todo) continue;
+    }
+    const unsigned front_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(front)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(box[0]), bx0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(box[1]), by0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(box[2]), bx1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(box[3]), by1);
+    do {
+      const int k = __builtin_ctz(todo);
+      todo &= todo - 1;
+      const uint32_t a = g[3 * k], b = g[3 * k + 1], c = g[3 * k + 2];
+      if (slow >> k & 1u) {
+        drawn += indexed_one<2>(v, a, b, c, rgb, cull, outward, T, clip, ctx);
+        continue;
+      }
+      const float* kk = (front_m >> k & 1u) ? v.kf : v.kb;
+      draw_boxed<2>(box[0][k], box[1][k], box[2][k], box[3][k], v.x[a], v.y[a], v.z[a], kk[a],
+                    v.x[b], v.y[b], v.z[b], kk[b], v.x[c], v.y[c], v.z[c], kk[c], rgb, T);
+    } while (todo);
+  }
+  for (; i < count; ++i) {
+    drawn +=
+        indexed_one<2>(v, t[3 * i], t[3 * i + 1], t[3 * i + 2], rgb, cull, outward, T, clip, ctx);
+  }
+  return drawn;
 }
 #endif
 
