@@ -478,64 +478,51 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
               const float rgb[3], const Target& T, int path);
 constexpr int32_t kMaxExtent = 1 << 14;
 
-// draw_triangle once the pixel box [bx0, bx1] x [by0, by1] (not empty, within the image) is
-// known: the edge functions and planes, then the small-triangle path or the pixel loops.
+// A triangle ready for the pixel paths: its pixel box (not empty, within the image), each
+// edge's value at the box's first centre without (e) and with (t) the top-left rule, the
+// edges' steps per pixel, twice its area (> 0), and inverse depth z and shade k at the
+// vertices in canonical winding (edge 0 runs a -> b, 1 b -> c, 2 c -> a; edge i weighs the
+// vertex opposite it).
+struct Edges {
+  int bx0, by0, bx1, by1;
+  int32_t e[3], t[3], ex[3], ey[3];
+  int32_t area2;
+  float z[3], k[3];
+};
+
+// The small-triangle path for boxes of at most 4 x 4 pixels, the pixel loops for the rest.
 template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 inline void
-draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float az, float ak,
-           int32_t bx_, int32_t by_, float bz, float bk, int32_t cx_, int32_t cy_, float cz,
-           float ck, const float rgb[3], const Target& T) {
-  const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
-  // Relative to the box's first centre.
-  const int32_t ax = ax_ - ox, ay = ay_ - oy;
-  int32_t bx = bx_ - ox, by = by_ - oy, cx = cx_ - ox, cy = cy_ - oy;
-  int32_t area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
-  if (area == 0) return;
-  if (area > 0) {  // canonical winding: every edge function is positive inside
-    std::swap(bx, cx);
-    std::swap(by, cy);
-    std::swap(bz, cz);
-    std::swap(bk, ck);
-    area = -area;
-  }
-  // Edge 0 runs a -> b, 1 b -> c, 2 c -> a; edge i weighs the vertex opposite it.
-  const int32_t dx0 = bx - ax, dy0 = by - ay, dx1 = cx - bx, dy1 = cy - by;
-  const int32_t dx2 = ax - cx, dy2 = ay - cy;
-  const int32_t e0 = ay * dx0 - ax * dy0, e1 = by * dx1 - bx * dy1, e2 = cy * dx2 - cx * dy2;
-  // Top-left rule: a pixel centre on an edge belongs to the triangle if the edge is a left
-  // edge (dy > 0 here) or a top one (dy == 0, dx < 0).
-  const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
-  const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
-  const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
-  const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
+draw_edges(const Edges& g, const float rgb[3], const Target& T) {
+  const int w = g.bx1 - g.bx0 + 1, h = g.by1 - g.by0 + 1;
   if (w <= 4 && h <= 4) {
-    const Small q{bx0,
-                  by0,
+    const Small q{g.bx0,
+                  g.by0,
                   w,
                   h,
-                  {e0, e1, e2},
-                  {t0, t1, t2},
-                  {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
-                  {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
-                  {az, bz, cz},
-                  {ak, bk, ck},
-                  -area};
+                  {g.e[0], g.e[1], g.e[2]},
+                  {g.t[0], g.t[1], g.t[2]},
+                  {g.ex[0], g.ex[1], g.ex[2]},
+                  {g.ey[0], g.ey[1], g.ey[2]},
+                  {g.z[0], g.z[1], g.z[2]},
+                  {g.k[0], g.k[1], g.k[2]},
+                  g.area2};
     // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
     if (w * h <= 2) {
       small_scalar(q, rgb, T);
       return;
     }
 #if SE3_RASTER_AVX2
-    if (kPath == 2 && bx0 + 4 <= T.W) {
+    if (kPath == 2 && g.bx0 + 4 <= T.W) {
       small_avx2(q, rgb, T);
       return;
     }
 #endif
 #if SE3_RASTER_SSE2
-    if (kPath >= 1 && bx0 + 4 <= T.W) {
+    if (kPath >= 1 && g.bx0 + 4 <= T.W) {
       small_sse2(q, rgb, T);
       return;
     }
@@ -543,24 +530,20 @@ draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float a
     small_scalar(q, rgb, T);
     return;
   }
-  const float inv = 1.0f / float(-area);
-  const float wa = az * inv, wb = bz * inv, wc = cz * inv;
-  const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
+  const float inv = 1.0f / float(g.area2);
+  const float wa = g.z[0] * inv, wb = g.z[1] * inv, wc = g.z[2] * inv;
+  const float ua = g.k[0] * inv, ub = g.k[1] * inv, uc = g.k[2] * inv;
   Setup s;
-  s.bx0 = bx0;
-  s.bx1 = bx1;
-  s.by0 = by0;
-  s.by1 = by1;
-  s.e0[0] = t0;
-  s.e0[1] = t1;
-  s.e0[2] = t2;
-  s.ex[0] = kSubpixel * dy0;
-  s.ex[1] = kSubpixel * dy1;
-  s.ex[2] = kSubpixel * dy2;
-  s.ey[0] = -kSubpixel * dx0;
-  s.ey[1] = -kSubpixel * dx1;
-  s.ey[2] = -kSubpixel * dx2;
-  const float fe0 = float(e0), fe1 = float(e1), fe2 = float(e2);
+  s.bx0 = g.bx0;
+  s.bx1 = g.bx1;
+  s.by0 = g.by0;
+  s.by1 = g.by1;
+  for (int i = 0; i < 3; ++i) {
+    s.e0[i] = g.t[i];
+    s.ex[i] = g.ex[i];
+    s.ey[i] = g.ey[i];
+  }
+  const float fe0 = float(g.e[0]), fe1 = float(g.e[1]), fe2 = float(g.e[2]);
   const float fx0 = float(s.ex[0]), fx1 = float(s.ex[1]), fx2 = float(s.ex[2]);
   const float fy0 = float(s.ey[0]), fy1 = float(s.ey[1]), fy2 = float(s.ey[2]);
   s.z0 = fe0 * wc + fe1 * wa + fe2 * wb;
@@ -582,6 +565,51 @@ draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float a
   }
 #endif
   raster_scalar(s, rgb, T);
+}
+
+// draw_triangle once the pixel box [bx0, bx1] x [by0, by1] (not empty, within the image) is
+// known: the edge functions, then draw_edges.
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void
+draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float az, float ak,
+           int32_t bx_, int32_t by_, float bz, float bk, int32_t cx_, int32_t cy_, float cz,
+           float ck, const float rgb[3], const Target& T) {
+  const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
+  // Relative to the box's first centre.
+  const int32_t ax = ax_ - ox, ay = ay_ - oy;
+  int32_t bx = bx_ - ox, by = by_ - oy, cx = cx_ - ox, cy = cy_ - oy;
+  int32_t area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+  if (area == 0) return;
+  if (area > 0) {  // canonical winding: every edge function is positive inside
+    std::swap(bx, cx);
+    std::swap(by, cy);
+    std::swap(bz, cz);
+    std::swap(bk, ck);
+    area = -area;
+  }
+  const int32_t dx0 = bx - ax, dy0 = by - ay, dx1 = cx - bx, dy1 = cy - by;
+  const int32_t dx2 = ax - cx, dy2 = ay - cy;
+  const int32_t e0 = ay * dx0 - ax * dy0, e1 = by * dx1 - bx * dy1, e2 = cy * dx2 - cx * dy2;
+  // Top-left rule: a pixel centre on an edge belongs to the triangle if the edge is a left
+  // edge (dy > 0 here) or a top one (dy == 0, dx < 0).
+  const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
+  const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
+  const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
+  const Edges g{bx0,
+                by0,
+                bx1,
+                by1,
+                {e0, e1, e2},
+                {t0, t1, t2},
+                {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
+                {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
+                -area,
+                {az, bz, cz},
+                {ak, bk, ck}};
+  draw_edges<kPath>(g, rgb, T);
 }
 
 // kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
@@ -687,12 +715,12 @@ indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float
 
 #if SE3_RASTER_AVX2
 // Edge (x0, y0) -> (x1, y1) as draw_boxed sets it up, eight triangles wide: its value at the
-// origin with the top-left rule folded in (returned) and its steps per pixel ex, ey.
-SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1, __m256i& ex,
-                                  __m256i& ey) {
+// origin without (e) and with (returned) the top-left rule folded in, its steps per pixel ex, ey.
+SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1, __m256i& e,
+                                  __m256i& ex, __m256i& ey) {
   const __m256i zero = _mm256_setzero_si256();
   const __m256i dx = _mm256_sub_epi32(x1, x0), dy = _mm256_sub_epi32(y1, y0);
-  const __m256i e = _mm256_sub_epi32(_mm256_mullo_epi32(y0, dx), _mm256_mullo_epi32(x0, dy));
+  e = _mm256_sub_epi32(_mm256_mullo_epi32(y0, dx), _mm256_mullo_epi32(x0, dy));
   const __m256i top_left =
       _mm256_or_si256(_mm256_cmpgt_epi32(dy, zero),
                       _mm256_and_si256(_mm256_cmpeq_epi32(dy, zero), _mm256_cmpgt_epi32(zero, dx)));
@@ -727,7 +755,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
   const __m256i part = _mm256_set1_epi32(T.rows.part);
   const int* xs = v.x;
   const int* ys = v.y;
-  alignas(32) int32_t box[4][8];
+  alignas(32) int32_t lanes[17][8];  // the survivors' Edges, lane by lane
   std::size_t i = 0;
   for (; i + 8 <= count; i += 8) {
     const uint32_t* g = t + 3 * i;
@@ -772,51 +800,63 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     drawn += std::size_t(__builtin_popcount(counted_m));
     unsigned todo = (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
     if (!todo) continue;
-    {
-      // Boxes of at most 2 x 2 pixels (most survivors of a detailed mesh): the edge functions
-      // at their centres as draw_boxed computes them (relative to the box's first centre, in
-      // canonical winding, top-left rule folded in); those covering no centre draw nothing.
-      const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
-      const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
-      const __m256i swap = _mm256_cmpgt_epi32(area, zero);
-      const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
-      const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
-      const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
-      const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
-      const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
-      __m256i ex0, ey0, ex1, ey1, ex2, ey2;
-      const __m256i t0 = edge_avx2(px, py, qx, qy, ex0, ey0);
-      const __m256i t1 = edge_avx2(qx, qy, rx, ry, ex1, ey1);
-      const __m256i t2 = edge_avx2(rx, ry, px, py, ex2, ey2);
-      // Sign bit set: the centre is outside.
-      const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), t2);
-      const __m256i c10 =
-          _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
-                          _mm256_add_epi32(t2, ex2));
-      const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
-                    u2 = _mm256_add_epi32(t2, ey2);
-      const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), u2);
-      const __m256i c11 =
-          _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
-                          _mm256_add_epi32(u2, ex2));
-      const __m256i one_col = _mm256_cmpeq_epi32(bx0, bx1), one_row = _mm256_cmpeq_epi32(by0, by1);
-      const __m256i none = _mm256_and_si256(
-          _mm256_and_si256(c00, _mm256_or_si256(c10, one_col)),
-          _mm256_and_si256(_mm256_or_si256(c01, one_row),
-                           _mm256_or_si256(c11, _mm256_or_si256(one_col, one_row))));
-      const __m256i one = _mm256_set1_epi32(1);
-      const __m256i tiny =
-          _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
-                                              _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
-                              none);
-      todo &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
-      if (!todo) continue;
-    }
+    // The edge functions as draw_boxed computes them: relative to the box's first centre, in
+    // canonical winding (b and c swapped where the area is positive).
+    const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
+    const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
+    const __m256i swap = _mm256_cmpgt_epi32(area, zero);
+    const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
+    const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
+    const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
+    const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
+    const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
+    __m256i e0, e1, e2, ex0, ey0, ex1, ey1, ex2, ey2;
+    const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
+    const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
+    const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
+    // Boxes of at most 2 x 2 pixels (most survivors of a detailed mesh) that cover no
+    // centre draw nothing. Sign bit set: the centre is outside.
+    const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), t2);
+    const __m256i c10 =
+        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
+                        _mm256_add_epi32(t2, ex2));
+    const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
+                  u2 = _mm256_add_epi32(t2, ey2);
+    const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), u2);
+    const __m256i c11 =
+        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
+                        _mm256_add_epi32(u2, ex2));
+    const __m256i one_col = _mm256_cmpeq_epi32(bx0, bx1), one_row = _mm256_cmpeq_epi32(by0, by1);
+    const __m256i none =
+        _mm256_and_si256(_mm256_and_si256(c00, _mm256_or_si256(c10, one_col)),
+                         _mm256_and_si256(_mm256_or_si256(c01, one_row),
+                                          _mm256_or_si256(c11, _mm256_or_si256(one_col, one_row))));
+    const __m256i one = _mm256_set1_epi32(1);
+    const __m256i tiny =
+        _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
+                                            _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
+                            none);
+    todo &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
+    if (!todo) continue;
     const unsigned front_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(front)));
-    _mm256_store_si256(reinterpret_cast<__m256i*>(box[0]), bx0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(box[1]), by0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(box[2]), bx1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(box[3]), by1);
+    const unsigned swap_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(swap)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), bx0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), by0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), bx1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[3]), by1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[4]), e0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[5]), e1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[6]), e2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[7]), t0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[8]), t1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[9]), t2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[10]), ex0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[11]), ex1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[12]), ex2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[13]), ey0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), ey1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
     do {
       const int k = __builtin_ctz(todo);
       todo &= todo - 1;
@@ -826,8 +866,19 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
         continue;
       }
       const float* kk = (front_m >> k & 1u) ? v.kf : v.kb;
-      draw_boxed<2>(box[0][k], box[1][k], box[2][k], box[3][k], v.x[a], v.y[a], v.z[a], kk[a],
-                    v.x[b], v.y[b], v.z[b], kk[b], v.x[c], v.y[c], v.z[c], kk[c], rgb, T);
+      const uint32_t q = (swap_m >> k & 1u) ? c : b, r = (swap_m >> k & 1u) ? b : c;
+      const Edges eg{lanes[0][k],
+                     lanes[1][k],
+                     lanes[2][k],
+                     lanes[3][k],
+                     {lanes[4][k], lanes[5][k], lanes[6][k]},
+                     {lanes[7][k], lanes[8][k], lanes[9][k]},
+                     {lanes[10][k], lanes[11][k], lanes[12][k]},
+                     {lanes[13][k], lanes[14][k], lanes[15][k]},
+                     lanes[16][k],
+                     {v.z[a], v.z[q], v.z[r]},
+                     {kk[a], kk[q], kk[r]}};
+      draw_edges<2>(eg, rgb, T);
     } while (todo);
   }
   for (; i < count; ++i) {
