@@ -275,17 +275,8 @@ struct Small {
   int32_t area2;         // twice the area, > 0
 };
 
-void small_scalar(const Small& q, const float rgb[3], const Target& T) {
-  unsigned covered = 0;
-  for (int j = 0; j < q.h; ++j) {
-    for (int i = 0; i < q.w; ++i) {
-      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
-           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
-        covered |= 1u << (4 * j + i);
-      }
-    }
-  }
-  if (!covered) return;
+// The covered pixels (bit 4 j + i: column i, row j of the box) drawn one at a time.
+void small_covered(const Small& q, unsigned covered, const float rgb[3], const Target& T) {
   const float inv = 1.0f / float(q.area2);
   const float wa = q.z[0] * inv, wb = q.z[1] * inv, wc = q.z[2] * inv;
   const float ua = q.k[0] * inv, ub = q.k[1] * inv, uc = q.k[2] * inv;
@@ -305,6 +296,19 @@ void small_scalar(const Small& q, const float rgb[3], const Target& T) {
       }
     }
   }
+}
+
+void small_scalar(const Small& q, const float rgb[3], const Target& T) {
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    for (int i = 0; i < q.w; ++i) {
+      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
+           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
+        covered |= 1u << (4 * j + i);
+      }
+    }
+  }
+  if (covered) small_covered(q, covered, rgb, T);
 }
 
 #if SE3_RASTER_SSE2
@@ -488,6 +492,8 @@ struct Edges {
   int32_t e[3], t[3], ex[3], ey[3];
   int32_t area2;
   float z[3], k[3];
+  int covered;  ///< boxes of one or two pixels: the centres covered as small_scalar finds them;
+                ///< else -1
 };
 
 // The small-triangle path for boxes of at most 4 x 4 pixels, the pixel loops for the rest.
@@ -512,7 +518,11 @@ draw_edges(const Edges& g, const float rgb[3], const Target& T) {
                   g.area2};
     // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
     if (w * h <= 2) {
-      small_scalar(q, rgb, T);
+      if (g.covered < 0) {
+        small_scalar(q, rgb, T);
+      } else if (g.covered) {
+        small_covered(q, unsigned(g.covered), rgb, T);
+      }
       return;
     }
 #if SE3_RASTER_AVX2
@@ -608,7 +618,8 @@ draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float a
                 {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
                 -area,
                 {az, bz, cz},
-                {ak, bk, ck}};
+                {ak, bk, ck},
+                -1};
   draw_edges<kPath>(g, rgb, T);
 }
 
@@ -742,7 +753,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                                                            ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
   const __m256i lane3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
-  const __m256i zero = _mm256_setzero_si256();
+  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
   const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
   const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
   const __m256i ext = _mm256_set1_epi32(kMaxExtent);
@@ -755,7 +766,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
   const __m256i part = _mm256_set1_epi32(T.rows.part);
   const int* xs = v.x;
   const int* ys = v.y;
-  alignas(32) int32_t lanes[17][8];  // the survivors' Edges, lane by lane
+  alignas(32) int32_t lanes[18][8];  // the survivors' Edges, lane by lane
   std::size_t i = 0;
   for (; i + 8 <= count; i += 8) {
     const uint32_t* g = t + 3 * i;
@@ -857,6 +868,18 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), ey1);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
+    {
+      // Boxes of one or two pixels: their covered centres as small_scalar's bits (column i,
+      // row j: bit 4 j + i); draw_edges uses them for those boxes only.
+      const __m256i in00 = _mm256_srli_epi32(_mm256_andnot_si256(c00, ones), 31);
+      const __m256i in10 =
+          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c10, one_col), ones), 31);
+      const __m256i in01 =
+          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c01, one_row), ones), 31);
+      const __m256i bits = _mm256_or_si256(
+          in00, _mm256_or_si256(_mm256_slli_epi32(in10, 1), _mm256_slli_epi32(in01, 4)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[17]), bits);
+    }
     do {
       const int k = __builtin_ctz(todo);
       todo &= todo - 1;
@@ -877,7 +900,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                      {lanes[13][k], lanes[14][k], lanes[15][k]},
                      lanes[16][k],
                      {v.z[a], v.z[q], v.z[r]},
-                     {kk[a], kk[q], kk[r]}};
+                     {kk[a], kk[q], kk[r]},
+                     lanes[17][k]};
       draw_edges<2>(eg, rgb, T);
     } while (todo);
   }
