@@ -492,8 +492,8 @@ struct Edges {
   int32_t e[3], t[3], ex[3], ey[3];
   int32_t area2;
   float z[3], k[3];
-  int covered;  ///< boxes of one or two pixels: the centres covered as small_scalar finds them;
-                ///< else -1
+  int covered;  ///< boxes of at most 2 x 2 pixels: the centres covered as small_scalar finds
+                ///< them; or -1
 };
 
 // The small-triangle path for boxes of at most 4 x 4 pixels, the pixel loops for the rest.
@@ -516,13 +516,14 @@ draw_edges(const Edges& g, const float rgb[3], const Target& T) {
                   {g.z[0], g.z[1], g.z[2]},
                   {g.k[0], g.k[1], g.k[2]},
                   g.area2};
-    // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
+    // At most 2 x 2 pixels with the coverage known, or one or two pixels: the scalar loop is
+    // cheaper than the vector set-up (same bits).
+    if (g.covered >= 0 && w <= 2 && h <= 2) {
+      if (g.covered) small_covered(q, unsigned(g.covered), rgb, T);
+      return;
+    }
     if (w * h <= 2) {
-      if (g.covered < 0) {
-        small_scalar(q, rgb, T);
-      } else if (g.covered) {
-        small_covered(q, unsigned(g.covered), rgb, T);
-      }
+      small_scalar(q, rgb, T);
       return;
     }
 #if SE3_RASTER_AVX2
@@ -869,15 +870,18 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
     {
-      // Boxes of one or two pixels: their covered centres as small_scalar's bits (column i,
-      // row j: bit 4 j + i); draw_edges uses them for those boxes only.
+      // Boxes of at most 2 x 2 pixels: their covered centres as small_scalar's bits (column
+      // i, row j: bit 4 j + i); draw_edges uses them for those boxes only.
       const __m256i in00 = _mm256_srli_epi32(_mm256_andnot_si256(c00, ones), 31);
       const __m256i in10 =
           _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c10, one_col), ones), 31);
       const __m256i in01 =
           _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c01, one_row), ones), 31);
-      const __m256i bits = _mm256_or_si256(
-          in00, _mm256_or_si256(_mm256_slli_epi32(in10, 1), _mm256_slli_epi32(in01, 4)));
+      const __m256i in11 = _mm256_srli_epi32(
+          _mm256_andnot_si256(_mm256_or_si256(c11, _mm256_or_si256(one_col, one_row)), ones), 31);
+      const __m256i bits =
+          _mm256_or_si256(_mm256_or_si256(in00, _mm256_slli_epi32(in10, 1)),
+                          _mm256_or_si256(_mm256_slli_epi32(in01, 4), _mm256_slli_epi32(in11, 5)));
       _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[17]), bits);
     }
     do {
