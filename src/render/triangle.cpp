@@ -227,6 +227,20 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
   }
   const bool border = s.bx0 + ((n + 7) & ~7) > W;
   const bool all_rows = T.rows.parts == 1;
+  if (n <= 8 && !border && all_rows) {
+    // Boxes at most eight wide: one group a row, from the box's left column (the loop below
+    // with nothing to choose).
+    uint32_t* crow = T.color + std::size_t(s.by0) * W + s.bx0;
+    float* drow = T.depth + std::size_t(s.by0) * W + s.bx0;
+    float zrs = s.z0, krs = s.k0;
+    for (int y = s.by0; y <= s.by1; ++y, crow += W, drow += W, zrs += s.zy, krs += s.ky,
+             ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
+             ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+      group_avx2(ev[0], ev[1], ev[2], 0, _mm256_set1_ps(zrs), _mm256_set1_ps(krs), zx, kx, c, crow,
+                 drow);
+    }
+    return;
+  }
   int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
   float zrs = s.z0, krs = s.k0;
   for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
