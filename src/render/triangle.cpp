@@ -227,17 +227,29 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
   }
   const bool border = s.bx0 + ((n + 7) & ~7) > W;
   const bool all_rows = T.rows.parts == 1;
-  if (n <= 8 && !border && all_rows) {
-    // Boxes at most eight wide: one group a row, from the box's left column (the loop below
-    // with nothing to choose).
+  if (n <= 16 && !border && all_rows) {
+    // Boxes at most sixteen wide: one or two groups a row from the box's left column, without
+    // the row spans (the loop below with nothing to choose; groups the span would skip draw
+    // nothing).
     uint32_t* crow = T.color + std::size_t(s.by0) * W + s.bx0;
     float* drow = T.depth + std::size_t(s.by0) * W + s.bx0;
     float zrs = s.z0, krs = s.k0;
+    if (n <= 8) {
+      for (int y = s.by0; y <= s.by1; ++y, crow += W, drow += W, zrs += s.zy, krs += s.ky,
+               ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
+               ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+        group_avx2(ev[0], ev[1], ev[2], 0, _mm256_set1_ps(zrs), _mm256_set1_ps(krs), zx, kx, c,
+                   crow, drow);
+      }
+      return;
+    }
     for (int y = s.by0; y <= s.by1; ++y, crow += W, drow += W, zrs += s.zy, krs += s.ky,
              ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
              ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
-      group_avx2(ev[0], ev[1], ev[2], 0, _mm256_set1_ps(zrs), _mm256_set1_ps(krs), zx, kx, c, crow,
-                 drow);
+      const __m256 zr = _mm256_set1_ps(zrs), kr = _mm256_set1_ps(krs);
+      group_avx2(ev[0], ev[1], ev[2], 0, zr, kr, zx, kx, c, crow, drow);
+      group_avx2(_mm256_add_epi32(ev[0], ex8[0]), _mm256_add_epi32(ev[1], ex8[1]),
+                 _mm256_add_epi32(ev[2], ex8[2]), 8, zr, kr, zx, kx, c, crow + 8, drow + 8);
     }
     return;
   }
