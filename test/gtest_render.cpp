@@ -333,6 +333,121 @@ TEST(RenderRaster, AllPathsGiveTheSameBits) {
   }
 }
 
+// fill_indexed's eight-wide front end (AVX2) against the one-triangle-at-a-time loops: tiny,
+// medium and huge triangles (extent above 2^14 sub-pixels), both windings, vertices outside
+// (the clip callback: called for the same triangles in the same order), culling on and off,
+// one and two row sets, a count that is not a multiple of eight. Same drawn counts, same bits.
+TEST(RenderRaster, IndexedFrontEndMatchesTheOtherPaths) {
+  std::vector<RasterPath> paths = {RasterPath::Scalar};
+  if (raster_has_simd()) paths.push_back(RasterPath::Sse2);
+  if (raster_best_path() == RasterPath::Avx2) paths.push_back(RasterPath::Avx2);
+  const int W = 1283, H = 301;
+  uint32_t seed = 777u;
+  auto rnd = [&seed]() {  // [0, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  const int nv = 4000;
+  std::vector<int32_t> X(nv), Y(nv);
+  std::vector<float> Z(nv), KF(nv), KB(nv);
+  std::vector<uint8_t> out(nv, 0);
+  for (int i = 0; i < nv; ++i) {
+    const int kind = i % 8;  // 0: anywhere in the guard band, else near the previous vertex
+    const double spread = kind < 6 ? 1.5 : kind == 6 ? 6.0 : 40.0;
+    if (kind == 0 || i == 0) {
+      X[i] = int32_t((rnd() * (W + 128) - 64) * 16);
+      Y[i] = int32_t((rnd() * (H + 128) - 64) * 16);
+    } else {
+      X[i] = X[i - 1] + int32_t((rnd() - 0.5) * spread * 16);
+      Y[i] = Y[i - 1] + int32_t((rnd() - 0.5) * spread * 16);
+    }
+    if (i >= nv / 2) {  // on the half-pixel grid: edges through pixel centres (top-left rule)
+      X[i] &= ~7;
+      Y[i] &= ~7;
+    }
+    Z[i] = float(0.5 + rnd());
+    KF[i] = float(rnd());
+    KB[i] = float(rnd());
+    if (rnd() < 0.02) out[i] = uint8_t(1 + int(rnd() * 31));
+  }
+  std::vector<uint32_t> idx;
+  const int nt = 3005;
+  for (int t = 0; t < nt; ++t) {
+    const bool huge = t % 53 == 0;  // three far vertices: extents up to the whole image
+    const uint32_t a = uint32_t(rnd() * nv) % nv;
+    const uint32_t b = huge ? uint32_t(rnd() * nv) % nv : (a + 1 + uint32_t(rnd() * 3)) % nv;
+    const uint32_t c = huge ? uint32_t(rnd() * nv) % nv : (a + 1 + uint32_t(rnd() * 3)) % nv;
+    idx.insert(idx.end(), {a, b, c});
+  }
+  // Tiny triangles with a horizontal or vertical edge through pixel centres (the top-left
+  // rule decides whether they draw anything), both windings, in the middle of the list.
+  std::vector<uint32_t> edges;
+  for (int j = 0; j < 24; ++j) {
+    const int32_t x = 16 * (2 * j + 1) + 8, y = 16 * (j % 12 + 2) + 8;  // a pixel centre
+    const int32_t d = 8 * (1 + j % 2);
+    const int32_t px[6] = {x - d, x + d, x, x, x, x + 8};
+    const int32_t py[6] = {y, y, y + 8, y + 16 * 3 + d, y + 16 * 3 - d, y + 16 * 3};
+    const uint32_t v0 = uint32_t(X.size());
+    for (int k = 0; k < 6; ++k) {
+      X.push_back(px[k]);
+      Y.push_back(py[k]);
+      Z.push_back(2.0f);
+      KF.push_back(0.5f);
+      KB.push_back(0.9f);
+      out.push_back(0);
+    }
+    // Below a horizontal edge (top), above it (bottom: nothing), right of a vertical edge.
+    edges.insert(edges.end(), {v0, v0 + 1, v0 + 2, v0 + 1, v0, v0 + 2});
+    edges.insert(edges.end(), {v0 + 3, v0 + 4, v0 + 5, v0 + 4, v0 + 3, v0 + 5});
+    edges.insert(edges.end(), {v0, v0 + 1, uint32_t(v0 + 2 - 2 * (j % 2))});
+  }
+  idx.insert(idx.begin() + 3 * (nt / 2), edges.begin(), edges.end());
+  const std::size_t ntri = idx.size() / 3;
+  struct Calls {
+    std::vector<uint32_t> seen;
+  };
+  auto clip = [](void* ctx, uint32_t a, uint32_t b, uint32_t c) -> std::size_t {
+    static_cast<Calls*>(ctx)->seen.insert(static_cast<Calls*>(ctx)->seen.end(), {a, b, c});
+    return 1;
+  };
+  const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), out.data()};
+  std::vector<Framebuffer> fbs;
+  std::vector<Calls> calls(paths.size());
+  std::vector<std::vector<std::size_t>> drawn(paths.size());
+  for (std::size_t p = 0; p < paths.size(); ++p) {
+    fbs.emplace_back(W, H);
+    fbs.back().set_path(paths[p]);
+    fbs.back().clear_depth();
+    for (int pass = 0; pass < 6; ++pass) {
+      const float rgb[3] = {float(40 * pass + 30), float(200 - 30 * pass), 90.0f};
+      const bool cull = pass % 2 == 0, outward = pass % 3 != 0;
+      for (int part = 0; part < (pass < 4 ? 1 : 2); ++part) {
+        RowSet rows;
+        if (pass >= 4) {
+          rows.shift = 4;
+          rows.parts = 2;
+          rows.part = part;
+        }
+        const std::size_t first = std::size_t(pass % 3) * 7, count = ntri - first - pass;
+        drawn[p].push_back(fbs.back().fill_indexed(va, idx.data() + 3 * first, count, rgb, cull,
+                                                   outward, rows, clip, &calls[p]));
+      }
+    }
+  }
+  std::size_t covered = 0;
+  for (int i = 0; i < W * H; ++i) covered += fbs[0].depth()[i] > 0;
+  EXPECT_GT(covered, std::size_t(W * H / 4)) << "the huge triangles cover much of the image";
+  EXPECT_GT(calls[0].seen.size(), 3u * 100) << "clipped triangles";
+  for (std::size_t p = 1; p < paths.size(); ++p) {
+    EXPECT_EQ(drawn[0], drawn[p]) << "path " << int(paths[p]);
+    EXPECT_EQ(calls[0].seen, calls[p].seen) << "path " << int(paths[p]);
+    EXPECT_EQ(std::memcmp(fbs[0].color(), fbs[p].color(), 4 * std::size_t(W) * H), 0)
+        << "colour, path " << int(paths[p]);
+    EXPECT_EQ(std::memcmp(fbs[0].depth(), fbs[p].depth(), 4 * std::size_t(W) * H), 0)
+        << "depth, path " << int(paths[p]);
+  }
+}
+
 // A box marker turns with its orientation R (a satellite bus tumbles with its base): a 2 x 0.2 x
 // 0.2 m bar is wide on screen along world x, tall once R turns its x axis onto world z, and a
 // non-rotation R draws nothing.

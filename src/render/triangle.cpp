@@ -227,6 +227,32 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
   }
   const bool border = s.bx0 + ((n + 7) & ~7) > W;
   const bool all_rows = T.rows.parts == 1;
+  if (n <= 16 && !border && all_rows) {
+    // Boxes at most sixteen wide: one or two groups a row from the box's left column, without
+    // the row spans (the loop below with nothing to choose; groups the span would skip draw
+    // nothing).
+    uint32_t* crow = T.color + std::size_t(s.by0) * W + s.bx0;
+    float* drow = T.depth + std::size_t(s.by0) * W + s.bx0;
+    float zrs = s.z0, krs = s.k0;
+    if (n <= 8) {
+      for (int y = s.by0; y <= s.by1; ++y, crow += W, drow += W, zrs += s.zy, krs += s.ky,
+               ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
+               ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+        group_avx2(ev[0], ev[1], ev[2], 0, _mm256_set1_ps(zrs), _mm256_set1_ps(krs), zx, kx, c,
+                   crow, drow);
+      }
+      return;
+    }
+    for (int y = s.by0; y <= s.by1; ++y, crow += W, drow += W, zrs += s.zy, krs += s.ky,
+             ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
+             ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
+      const __m256 zr = _mm256_set1_ps(zrs), kr = _mm256_set1_ps(krs);
+      group_avx2(ev[0], ev[1], ev[2], 0, zr, kr, zx, kx, c, crow, drow);
+      group_avx2(_mm256_add_epi32(ev[0], ex8[0]), _mm256_add_epi32(ev[1], ex8[1]),
+                 _mm256_add_epi32(ev[2], ex8[2]), 8, zr, kr, zx, kx, c, crow + 8, drow + 8);
+    }
+    return;
+  }
   int32_t er[3] = {s.e0[0], s.e0[1], s.e0[2]};
   float zrs = s.z0, krs = s.k0;
   for (int y = s.by0; y <= s.by1; ++y, er[0] += s.ey[0], er[1] += s.ey[1], er[2] += s.ey[2],
@@ -275,17 +301,8 @@ struct Small {
   int32_t area2;         // twice the area, > 0
 };
 
-void small_scalar(const Small& q, const float rgb[3], const Target& T) {
-  unsigned covered = 0;
-  for (int j = 0; j < q.h; ++j) {
-    for (int i = 0; i < q.w; ++i) {
-      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
-           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
-        covered |= 1u << (4 * j + i);
-      }
-    }
-  }
-  if (!covered) return;
+// The covered pixels (bit 4 j + i: column i, row j of the box) drawn one at a time.
+void small_covered(const Small& q, unsigned covered, const float rgb[3], const Target& T) {
   const float inv = 1.0f / float(q.area2);
   const float wa = q.z[0] * inv, wb = q.z[1] * inv, wc = q.z[2] * inv;
   const float ua = q.k[0] * inv, ub = q.k[1] * inv, uc = q.k[2] * inv;
@@ -305,6 +322,19 @@ void small_scalar(const Small& q, const float rgb[3], const Target& T) {
       }
     }
   }
+}
+
+void small_scalar(const Small& q, const float rgb[3], const Target& T) {
+  unsigned covered = 0;
+  for (int j = 0; j < q.h; ++j) {
+    for (int i = 0; i < q.w; ++i) {
+      if (((q.t[0] + i * q.ex[0] + j * q.ey[0]) | (q.t[1] + i * q.ex[1] + j * q.ey[1]) |
+           (q.t[2] + i * q.ex[2] + j * q.ey[2])) >= 0) {
+        covered |= 1u << (4 * j + i);
+      }
+    }
+  }
+  if (covered) small_covered(q, covered, rgb, T);
 }
 
 #if SE3_RASTER_SSE2
@@ -478,6 +508,148 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
               const float rgb[3], const Target& T, int path);
 constexpr int32_t kMaxExtent = 1 << 14;
 
+// A triangle ready for the pixel paths: its pixel box (not empty, within the image), each
+// edge's value at the box's first centre without (e) and with (t) the top-left rule, the
+// edges' steps per pixel, twice its area (> 0), and inverse depth z and shade k at the
+// vertices in canonical winding (edge 0 runs a -> b, 1 b -> c, 2 c -> a; edge i weighs the
+// vertex opposite it).
+struct Edges {
+  int bx0, by0, bx1, by1;
+  int32_t e[3], t[3], ex[3], ey[3];
+  int32_t area2;
+  float z[3], k[3];
+  int covered;  ///< boxes of at most 2 x 2 pixels: the centres covered as small_scalar finds
+                ///< them; or -1
+};
+
+// The small-triangle path for boxes of at most 4 x 4 pixels, the pixel loops for the rest.
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void
+draw_edges(const Edges& g, const float rgb[3], const Target& T) {
+  const int w = g.bx1 - g.bx0 + 1, h = g.by1 - g.by0 + 1;
+  if (w <= 4 && h <= 4) {
+    const Small q{g.bx0,
+                  g.by0,
+                  w,
+                  h,
+                  {g.e[0], g.e[1], g.e[2]},
+                  {g.t[0], g.t[1], g.t[2]},
+                  {g.ex[0], g.ex[1], g.ex[2]},
+                  {g.ey[0], g.ey[1], g.ey[2]},
+                  {g.z[0], g.z[1], g.z[2]},
+                  {g.k[0], g.k[1], g.k[2]},
+                  g.area2};
+    // At most 2 x 2 pixels with the coverage known, or one or two pixels: the scalar loop is
+    // cheaper than the vector set-up (same bits).
+    if (g.covered >= 0 && w <= 2 && h <= 2) {
+      if (g.covered) small_covered(q, unsigned(g.covered), rgb, T);
+      return;
+    }
+    if (w * h <= 2) {
+      small_scalar(q, rgb, T);
+      return;
+    }
+#if SE3_RASTER_AVX2
+    if (kPath == 2 && g.bx0 + 4 <= T.W) {
+      small_avx2(q, rgb, T);
+      return;
+    }
+#endif
+#if SE3_RASTER_SSE2
+    if (kPath >= 1 && g.bx0 + 4 <= T.W) {
+      small_sse2(q, rgb, T);
+      return;
+    }
+#endif
+    small_scalar(q, rgb, T);
+    return;
+  }
+  const float inv = 1.0f / float(g.area2);
+  const float wa = g.z[0] * inv, wb = g.z[1] * inv, wc = g.z[2] * inv;
+  const float ua = g.k[0] * inv, ub = g.k[1] * inv, uc = g.k[2] * inv;
+  Setup s;
+  s.bx0 = g.bx0;
+  s.bx1 = g.bx1;
+  s.by0 = g.by0;
+  s.by1 = g.by1;
+  for (int i = 0; i < 3; ++i) {
+    s.e0[i] = g.t[i];
+    s.ex[i] = g.ex[i];
+    s.ey[i] = g.ey[i];
+  }
+  const float fe0 = float(g.e[0]), fe1 = float(g.e[1]), fe2 = float(g.e[2]);
+  const float fx0 = float(s.ex[0]), fx1 = float(s.ex[1]), fx2 = float(s.ex[2]);
+  const float fy0 = float(s.ey[0]), fy1 = float(s.ey[1]), fy2 = float(s.ey[2]);
+  s.z0 = fe0 * wc + fe1 * wa + fe2 * wb;
+  s.zx = fx0 * wc + fx1 * wa + fx2 * wb;
+  s.zy = fy0 * wc + fy1 * wa + fy2 * wb;
+  s.k0 = fe0 * uc + fe1 * ua + fe2 * ub;
+  s.kx = fx0 * uc + fx1 * ua + fx2 * ub;
+  s.ky = fy0 * uc + fy1 * ua + fy2 * ub;
+#if SE3_RASTER_AVX2
+  if (kPath == 2) {
+    raster_avx2(s, rgb, T);
+    return;
+  }
+#endif
+#if SE3_RASTER_SSE2
+  if (kPath >= 1) {
+    raster_sse2(s, rgb, T);
+    return;
+  }
+#endif
+  raster_scalar(s, rgb, T);
+}
+
+// draw_triangle once the pixel box [bx0, bx1] x [by0, by1] (not empty, within the image) is
+// known: the edge functions, then draw_edges.
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void
+draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float az, float ak,
+           int32_t bx_, int32_t by_, float bz, float bk, int32_t cx_, int32_t cy_, float cz,
+           float ck, const float rgb[3], const Target& T) {
+  const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
+  // Relative to the box's first centre.
+  const int32_t ax = ax_ - ox, ay = ay_ - oy;
+  int32_t bx = bx_ - ox, by = by_ - oy, cx = cx_ - ox, cy = cy_ - oy;
+  int32_t area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+  if (area == 0) return;
+  if (area > 0) {  // canonical winding: every edge function is positive inside
+    std::swap(bx, cx);
+    std::swap(by, cy);
+    std::swap(bz, cz);
+    std::swap(bk, ck);
+    area = -area;
+  }
+  const int32_t dx0 = bx - ax, dy0 = by - ay, dx1 = cx - bx, dy1 = cy - by;
+  const int32_t dx2 = ax - cx, dy2 = ay - cy;
+  const int32_t e0 = ay * dx0 - ax * dy0, e1 = by * dx1 - bx * dy1, e2 = cy * dx2 - cx * dy2;
+  // Top-left rule: a pixel centre on an edge belongs to the triangle if the edge is a left
+  // edge (dy > 0 here) or a top one (dy == 0, dx < 0).
+  const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
+  const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
+  const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
+  const Edges g{bx0,
+                by0,
+                bx1,
+                by1,
+                {e0, e1, e2},
+                {t0, t1, t2},
+                {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
+                {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
+                -area,
+                {az, bz, cz},
+                {ak, bk, ck},
+                -1};
+  draw_edges<kPath>(g, rgb, T);
+}
+
 // kPath: 0 scalar, 1 SSE2, 2 AVX2 (RasterPath).
 template <int kPath>
 #if defined(__GNUC__)
@@ -503,100 +675,8 @@ draw_triangle(int32_t ax_, int32_t ay_, float az, float ak, int32_t bx_, int32_t
   if (T.rows.parts > 1 && (by0 >> T.rows.shift) == (by1 >> T.rows.shift) && !T.rows.has(by0)) {
     return;  // one band, another thread's
   }
-  const int32_t ox = kSubpixel * bx0 + kHalf, oy = kSubpixel * by0 + kHalf;
-  // Relative to the box's first centre.
-  const int32_t ax = ax_ - ox, ay = ay_ - oy;
-  int32_t bx = bx_ - ox, by = by_ - oy, cx = cx_ - ox, cy = cy_ - oy;
-  int32_t area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
-  if (area == 0) return;
-  if (area > 0) {  // canonical winding: every edge function is positive inside
-    std::swap(bx, cx);
-    std::swap(by, cy);
-    std::swap(bz, cz);
-    std::swap(bk, ck);
-    area = -area;
-  }
-  // Edge 0 runs a -> b, 1 b -> c, 2 c -> a; edge i weighs the vertex opposite it.
-  const int32_t dx0 = bx - ax, dy0 = by - ay, dx1 = cx - bx, dy1 = cy - by;
-  const int32_t dx2 = ax - cx, dy2 = ay - cy;
-  const int32_t e0 = ay * dx0 - ax * dy0, e1 = by * dx1 - bx * dy1, e2 = cy * dx2 - cx * dy2;
-  // Top-left rule: a pixel centre on an edge belongs to the triangle if the edge is a left
-  // edge (dy > 0 here) or a top one (dy == 0, dx < 0).
-  const int32_t t0 = e0 - !(dy0 > 0 || (dy0 == 0 && dx0 < 0));
-  const int32_t t1 = e1 - !(dy1 > 0 || (dy1 == 0 && dx1 < 0));
-  const int32_t t2 = e2 - !(dy2 > 0 || (dy2 == 0 && dx2 < 0));
-  const int w = bx1 - bx0 + 1, h = by1 - by0 + 1;
-  if (w <= 4 && h <= 4) {
-    const Small q{bx0,
-                  by0,
-                  w,
-                  h,
-                  {e0, e1, e2},
-                  {t0, t1, t2},
-                  {kSubpixel * dy0, kSubpixel * dy1, kSubpixel * dy2},
-                  {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
-                  {az, bz, cz},
-                  {ak, bk, ck},
-                  -area};
-    // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
-    if (w * h <= 2) {
-      small_scalar(q, rgb, T);
-      return;
-    }
-#if SE3_RASTER_AVX2
-    if (kPath == 2 && bx0 + 4 <= T.W) {
-      small_avx2(q, rgb, T);
-      return;
-    }
-#endif
-#if SE3_RASTER_SSE2
-    if (kPath >= 1 && bx0 + 4 <= T.W) {
-      small_sse2(q, rgb, T);
-      return;
-    }
-#endif
-    small_scalar(q, rgb, T);
-    return;
-  }
-  const float inv = 1.0f / float(-area);
-  const float wa = az * inv, wb = bz * inv, wc = cz * inv;
-  const float ua = ak * inv, ub = bk * inv, uc = ck * inv;
-  Setup s;
-  s.bx0 = bx0;
-  s.bx1 = bx1;
-  s.by0 = by0;
-  s.by1 = by1;
-  s.e0[0] = t0;
-  s.e0[1] = t1;
-  s.e0[2] = t2;
-  s.ex[0] = kSubpixel * dy0;
-  s.ex[1] = kSubpixel * dy1;
-  s.ex[2] = kSubpixel * dy2;
-  s.ey[0] = -kSubpixel * dx0;
-  s.ey[1] = -kSubpixel * dx1;
-  s.ey[2] = -kSubpixel * dx2;
-  const float fe0 = float(e0), fe1 = float(e1), fe2 = float(e2);
-  const float fx0 = float(s.ex[0]), fx1 = float(s.ex[1]), fx2 = float(s.ex[2]);
-  const float fy0 = float(s.ey[0]), fy1 = float(s.ey[1]), fy2 = float(s.ey[2]);
-  s.z0 = fe0 * wc + fe1 * wa + fe2 * wb;
-  s.zx = fx0 * wc + fx1 * wa + fx2 * wb;
-  s.zy = fy0 * wc + fy1 * wa + fy2 * wb;
-  s.k0 = fe0 * uc + fe1 * ua + fe2 * ub;
-  s.kx = fx0 * uc + fx1 * ua + fx2 * ub;
-  s.ky = fy0 * uc + fy1 * ua + fy2 * ub;
-#if SE3_RASTER_AVX2
-  if (kPath == 2) {
-    raster_avx2(s, rgb, T);
-    return;
-  }
-#endif
-#if SE3_RASTER_SSE2
-  if (kPath >= 1) {
-    raster_sse2(s, rgb, T);
-    return;
-  }
-#endif
-  raster_scalar(s, rgb, T);
+  draw_boxed<kPath>(bx0, by0, bx1, by1, ax_, ay_, az, ak, bx_, by_, bz, bk, cx_, cy_, cz, ck, rgb,
+                    T);
 }
 
 // Draws a triangle of any extent: one larger than 2^14 sub-pixels (1024 pixels: a big image,
@@ -631,6 +711,32 @@ void draw_any(const RasterVertex& a, const RasterVertex& b, const RasterVertex& 
   }
 }
 
+// One triangle of the indexed loop: a vertex outside goes to the clip callback (unless all
+// three are outside one plane), degenerate and culled back faces are dropped, the rest drawn.
+// Returns the triangles counted as drawn.
+template <int kPath>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline std::size_t
+indexed_one(const VertexArrays& v, uint32_t a, uint32_t b, uint32_t c, const float rgb[3],
+            bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
+  const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
+  if (oa | ob | oc) {
+    if (!(oa & ob & oc) && clip) return clip(ctx, a, b, c);  // rare: clipped in 4-D
+    return 0;
+  }
+  const int32_t ax = v.x[a], ay = v.y[a], bx = v.x[b], by = v.y[b], cx = v.x[c], cy = v.y[c];
+  const int64_t area = int64_t(bx - ax) * (cy - ay) - int64_t(cx - ax) * (by - ay);
+  if (area == 0) return 0;
+  // Screen y runs down: a triangle counter-clockwise as seen has area < 0 here.
+  const bool front = (area < 0) == outward;
+  if (!front && cull) return 0;
+  const float* k = front ? v.kf : v.kb;
+  draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+  return 1;
+}
+
 template <int kPath>
 #if defined(__GNUC__)
 __attribute__((always_inline))
@@ -639,34 +745,201 @@ inline std::size_t
 indexed(const VertexArrays& v, const uint32_t* t, std::size_t count, const float rgb[3], bool cull,
         bool outward, const Target& T, ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
-  const uint32_t* end = t + 3 * count;
-  for (; t < end; t += 3) {
-    const uint32_t a = t[0], b = t[1], c = t[2];
-    const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
-    if (oa | ob | oc) {
-      if (!(oa & ob & oc) && clip) drawn += clip(ctx, a, b, c);  // rare: clipped in 4-D
-      continue;
-    }
-    const int32_t ax = v.x[a], ay = v.y[a], bx = v.x[b], by = v.y[b], cx = v.x[c], cy = v.y[c];
-    const int64_t area = int64_t(bx - ax) * (cy - ay) - int64_t(cx - ax) * (by - ay);
-    if (area == 0) continue;
-    // Screen y runs down: a triangle counter-clockwise as seen has area < 0 here.
-    const bool front = (area < 0) == outward;
-    if (!front && cull) continue;
-    ++drawn;
-    const float* k = front ? v.kf : v.kb;
-    draw_triangle<kPath>(ax, ay, v.z[a], k[a], bx, by, v.z[b], k[b], cx, cy, v.z[c], k[c], rgb, T);
+  for (const uint32_t* end = t + 3 * count; t < end; t += 3) {
+    drawn += indexed_one<kPath>(v, t[0], t[1], t[2], rgb, cull, outward, T, clip, ctx);
   }
   return drawn;
 }
 
 #if SE3_RASTER_AVX2
-// The whole triangle loop compiled for AVX2 (VEX encodings, three-operand forms).
+// Edge (x0, y0) -> (x1, y1) as draw_boxed sets it up, eight triangles wide: its value at the
+// origin without (e) and with (returned) the top-left rule folded in, its steps per pixel ex, ey.
+SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1, __m256i& e,
+                                  __m256i& ex, __m256i& ey) {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i dx = _mm256_sub_epi32(x1, x0), dy = _mm256_sub_epi32(y1, y0);
+  e = _mm256_sub_epi32(_mm256_mullo_epi32(y0, dx), _mm256_mullo_epi32(x0, dy));
+  const __m256i top_left =
+      _mm256_or_si256(_mm256_cmpgt_epi32(dy, zero),
+                      _mm256_and_si256(_mm256_cmpeq_epi32(dy, zero), _mm256_cmpgt_epi32(zero, dx)));
+  ex = _mm256_slli_epi32(dy, 4);
+  ey = _mm256_sub_epi32(zero, _mm256_slli_epi32(dx, 4));
+  return _mm256_add_epi32(e, _mm256_xor_si256(top_left, _mm256_cmpeq_epi32(zero, zero)));
+}
+
+// The triangle loop for AVX2 with a front end eight triangles wide: the vertices of eight
+// triangles are gathered and their signed areas, culling, pixel boxes and the empty-box and
+// other-band rejections computed in vector lanes, without a branch per triangle (on a detailed
+// mesh most triangles end there: back faces, or boxes without a pixel centre). The survivors
+// go to draw_boxed in their order; triangles with a vertex outside or an extent above
+// kMaxExtent (where 32-bit areas could overflow) take indexed_one. Compiled as one function
+// (VEX encodings, three-operand forms).
 SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v, const uint32_t* t,
                                                            std::size_t count, const float rgb[3],
                                                            bool cull, bool outward, const Target& T,
                                                            ClipCallback clip, void* ctx) {
-  return indexed<2>(v, t, count, rgb, cull, outward, T, clip, ctx);
+  std::size_t drawn = 0;
+  const __m256i lane3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
+  const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
+  const __m256i ext = _mm256_set1_epi32(kMaxExtent);
+  // Lanes of front faces: the sign of the area, flipped when clockwise faces out.
+  const __m256i flip = _mm256_set1_epi32(outward ? 0 : -1);
+  const __m256i back_ok = _mm256_set1_epi32(cull ? 0 : -1);
+  const bool bands = T.rows.parts > 1;
+  const __m128i shift = _mm_cvtsi32_si128(T.rows.shift);
+  const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
+  const __m256i part = _mm256_set1_epi32(T.rows.part);
+  const int* xs = v.x;
+  const int* ys = v.y;
+  alignas(32) int32_t lanes[18][8];  // the survivors' Edges, lane by lane
+  std::size_t i = 0;
+  for (; i + 8 <= count; i += 8) {
+    const uint32_t* g = t + 3 * i;
+    unsigned slow = 0;
+    for (int k = 0; k < 8; ++k) {
+      slow |= unsigned((v.out[g[3 * k]] | v.out[g[3 * k + 1]] | v.out[g[3 * k + 2]]) != 0) << k;
+    }
+    const int* gi = reinterpret_cast<const int*>(g);
+    const __m256i ia = _mm256_i32gather_epi32(gi, lane3, 4);
+    const __m256i ib = _mm256_i32gather_epi32(gi + 1, lane3, 4);
+    const __m256i ic = _mm256_i32gather_epi32(gi + 2, lane3, 4);
+    const __m256i ax = _mm256_i32gather_epi32(xs, ia, 4), ay = _mm256_i32gather_epi32(ys, ia, 4);
+    const __m256i bx = _mm256_i32gather_epi32(xs, ib, 4), by = _mm256_i32gather_epi32(ys, ib, 4);
+    const __m256i cx = _mm256_i32gather_epi32(xs, ic, 4), cy = _mm256_i32gather_epi32(ys, ic, 4);
+    const __m256i minx = _mm256_min_epi32(ax, _mm256_min_epi32(bx, cx));
+    const __m256i maxx = _mm256_max_epi32(ax, _mm256_max_epi32(bx, cx));
+    const __m256i miny = _mm256_min_epi32(ay, _mm256_min_epi32(by, cy));
+    const __m256i maxy = _mm256_max_epi32(ay, _mm256_max_epi32(by, cy));
+    const __m256i big = _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(maxx, minx), ext),
+                                        _mm256_cmpgt_epi32(_mm256_sub_epi32(maxy, miny), ext));
+    slow |= unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(big)));
+    // Exact in 32 bits where the extent is at most 2^14 (|area| <= 2^29).
+    const __m256i area =
+        _mm256_sub_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(bx, ax), _mm256_sub_epi32(cy, ay)),
+                         _mm256_mullo_epi32(_mm256_sub_epi32(cx, ax), _mm256_sub_epi32(by, ay)));
+    const __m256i front = _mm256_xor_si256(_mm256_srai_epi32(area, 31), flip);
+    const __m256i counted =
+        _mm256_andnot_si256(_mm256_cmpeq_epi32(area, zero), _mm256_or_si256(front, back_ok));
+    // Pixels whose centre lies in the box (as in draw_triangle).
+    const __m256i bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
+    const __m256i bx1 = _mm256_min_epi32(wmax, _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
+    const __m256i by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
+    const __m256i by1 = _mm256_min_epi32(hmax, _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
+    __m256i empty = _mm256_or_si256(_mm256_cmpgt_epi32(bx0, bx1), _mm256_cmpgt_epi32(by0, by1));
+    if (bands) {  // the box within one band, another thread's
+      const __m256i b0 = _mm256_sra_epi32(by0, shift), b1 = _mm256_sra_epi32(by1, shift);
+      const __m256i other = _mm256_andnot_si256(
+          _mm256_cmpeq_epi32(_mm256_and_si256(b0, part_mask), part), _mm256_cmpeq_epi32(b0, b1));
+      empty = _mm256_or_si256(empty, other);
+    }
+    const unsigned counted_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(counted))) & ~slow;
+    drawn += std::size_t(__builtin_popcount(counted_m));
+    unsigned todo = (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
+    if (!todo) continue;
+    // The edge functions as draw_boxed computes them: relative to the box's first centre, in
+    // canonical winding (b and c swapped where the area is positive).
+    const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
+    const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
+    const __m256i swap = _mm256_cmpgt_epi32(area, zero);
+    const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
+    const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
+    const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
+    const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
+    const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
+    __m256i e0, e1, e2, ex0, ey0, ex1, ey1, ex2, ey2;
+    const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
+    const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
+    const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
+    // Boxes of at most 2 x 2 pixels (most survivors of a detailed mesh) that cover no
+    // centre draw nothing. Sign bit set: the centre is outside.
+    const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), t2);
+    const __m256i c10 =
+        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
+                        _mm256_add_epi32(t2, ex2));
+    const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
+                  u2 = _mm256_add_epi32(t2, ey2);
+    const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), u2);
+    const __m256i c11 =
+        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
+                        _mm256_add_epi32(u2, ex2));
+    const __m256i one_col = _mm256_cmpeq_epi32(bx0, bx1), one_row = _mm256_cmpeq_epi32(by0, by1);
+    const __m256i none =
+        _mm256_and_si256(_mm256_and_si256(c00, _mm256_or_si256(c10, one_col)),
+                         _mm256_and_si256(_mm256_or_si256(c01, one_row),
+                                          _mm256_or_si256(c11, _mm256_or_si256(one_col, one_row))));
+    const __m256i one = _mm256_set1_epi32(1);
+    const __m256i tiny =
+        _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
+                                            _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
+                            none);
+    todo &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
+    if (!todo) continue;
+    const unsigned front_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(front)));
+    const unsigned swap_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(swap)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), bx0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), by0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), bx1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[3]), by1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[4]), e0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[5]), e1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[6]), e2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[7]), t0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[8]), t1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[9]), t2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[10]), ex0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[11]), ex1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[12]), ex2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[13]), ey0);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), ey1);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
+    {
+      // Boxes of at most 2 x 2 pixels: their covered centres as small_scalar's bits (column
+      // i, row j: bit 4 j + i); draw_edges uses them for those boxes only.
+      const __m256i in00 = _mm256_srli_epi32(_mm256_andnot_si256(c00, ones), 31);
+      const __m256i in10 =
+          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c10, one_col), ones), 31);
+      const __m256i in01 =
+          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c01, one_row), ones), 31);
+      const __m256i in11 = _mm256_srli_epi32(
+          _mm256_andnot_si256(_mm256_or_si256(c11, _mm256_or_si256(one_col, one_row)), ones), 31);
+      const __m256i bits =
+          _mm256_or_si256(_mm256_or_si256(in00, _mm256_slli_epi32(in10, 1)),
+                          _mm256_or_si256(_mm256_slli_epi32(in01, 4), _mm256_slli_epi32(in11, 5)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[17]), bits);
+    }
+    do {
+      const int k = __builtin_ctz(todo);
+      todo &= todo - 1;
+      const uint32_t a = g[3 * k], b = g[3 * k + 1], c = g[3 * k + 2];
+      if (slow >> k & 1u) {
+        drawn += indexed_one<2>(v, a, b, c, rgb, cull, outward, T, clip, ctx);
+        continue;
+      }
+      const float* kk = (front_m >> k & 1u) ? v.kf : v.kb;
+      const uint32_t q = (swap_m >> k & 1u) ? c : b, r = (swap_m >> k & 1u) ? b : c;
+      const Edges eg{lanes[0][k],
+                     lanes[1][k],
+                     lanes[2][k],
+                     lanes[3][k],
+                     {lanes[4][k], lanes[5][k], lanes[6][k]},
+                     {lanes[7][k], lanes[8][k], lanes[9][k]},
+                     {lanes[10][k], lanes[11][k], lanes[12][k]},
+                     {lanes[13][k], lanes[14][k], lanes[15][k]},
+                     lanes[16][k],
+                     {v.z[a], v.z[q], v.z[r]},
+                     {kk[a], kk[q], kk[r]},
+                     lanes[17][k]};
+      draw_edges<2>(eg, rgb, T);
+    } while (todo);
+  }
+  for (; i < count; ++i) {
+    drawn +=
+        indexed_one<2>(v, t[3 * i], t[3 * i + 1], t[3 * i + 2], rgb, cull, outward, T, clip, ctx);
+  }
+  return drawn;
 }
 #endif
 
