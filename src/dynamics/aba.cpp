@@ -293,19 +293,37 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
   } else {
     data.V[0].setZero();
   }
+  // The arrays' data pointers and the base's kind read once: the stores through double* below
+  // would otherwise make GCC reload some of them for every body.
+  const bool fixed = !model.floating;
+  const JointModel* joints = model.joints.data();
+  const int* parent = model.parent.data();
+  const Inertia* inertia = model.inertia.data();
+  const SE3* Xup = data.Xup.data();
+  Vec6* Vs = data.V.data();
+  Vec6* Fs = data.F.data();
+  Vec6* cs = data.c.data();
+  Vec6* As = data.A.data();
+  Vec6* Us = data.U.data();
+  Mat6* IAs = data.IA.data();
+  double* Dinvs = data.Dinv.data();
+  double* us = data.u.data();
+  double* ddq = data.ddq.data();
+  const double* vd = v.data();
+  const double* taud = tau.data();
   for (int i = 1; i <= model.n; ++i) {
-    const JointModel& jm = model.joints[i];
-    const double qd = v[jm.idx_v];
-    double* V = data.V[i].data();
-    const Inertia& I = model.inertia[i];
-    set_inertia_upper(I, data.IA[i]);
-    double* pA = data.F[i].data();
+    const JointModel& jm = joints[i];
+    const double qd = vd[jm.idx_v];
+    double* V = Vs[i].data();
+    const Inertia& I = inertia[i];
+    set_inertia_upper(I, IAs[i]);
+    double* pA = Fs[i].data();
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
-      if (model.parent[i] == 0 && !model.floating) {
+      if (parent[i] == 0 && fixed) {
         // On the fixed base: V = S qd, so gamma = V x S qd = 0 and pA = V x* (J V) =
         // qd^2 e_z x [I e_z; h x e_z] on both halves (revolute), 0 (prismatic).
-        for (int r = 0; r < 6; ++r) V[r] = 0, data.c[i][r] = 0, pA[r] = 0;
+        for (int r = 0; r < 6; ++r) V[r] = 0, cs[i][r] = 0, pA[r] = 0;
         V[k] = qd;
         if constexpr (k == 2) {
           double G[6];
@@ -315,27 +333,27 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
         }
         return;
       }
-      detail::child_twist(J, data.Xup[i], data.V[model.parent[i]].data(), qd, V);
-      J.bias_acceleration(V, qd, data.c[i].data());
+      detail::child_twist(J, Xup[i], Vs[parent[i]].data(), qd, V);
+      J.bias_acceleration(V, qd, cs[i].data());
       detail::bias_force(I, V, pA);  // pA, eq. (39): -ad*_V J V
     });
   }
   // Inward: articulated inertias (38) and bias forces (40)-(41).
   for (int i = model.n; i >= 1; --i) {
-    const JointModel& jm = model.joints[i];
+    const JointModel& jm = joints[i];
     const int iv = jm.idx_v;
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
-      const Mat6& IA = data.IA[i];
-      Vec6& U = data.U[iv];
+      const Mat6& IA = IAs[i];
+      Vec6& U = Us[iv];
       for (int r = 0; r < 6; ++r) U[r] = r <= k ? up(IA, r, k) : up(IA, k, r);  // IA S
       const double Dinv = 1.0 / U[k];
-      data.Dinv[iv] = Dinv;
-      const double u = tau[iv] - data.F[i][k];
-      data.u[iv] = u;
-      const int p = model.parent[i];
-      if (p == 0 && !model.floating) return;
-      inward_step(J, data.Xup[i], IA, U, Dinv, u, data.F[i], data.c[i], data.IA[p], data.F[p]);
+      Dinvs[iv] = Dinv;
+      const double u = taud[iv] - Fs[i][k];
+      us[iv] = u;
+      const int p = parent[i];
+      if (p == 0 && fixed) return;
+      inward_step(J, Xup[i], IA, U, Dinv, u, Fs[i], cs[i], IAs[p], Fs[p]);
     });
   }
   // Outward: accelerations (42)-(43), with gravity as the fictitious base acceleration.
@@ -349,28 +367,28 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     data.A[0] = ag;
   }
   for (int i = 1; i <= model.n; ++i) {
-    const JointModel& jm = model.joints[i];
+    const JointModel& jm = joints[i];
     const int iv = jm.idx_v;
-    double* a = data.A[i].data();
-    const double* U = data.U[iv].data();
+    double* a = As[i].data();
+    const double* U = Us[iv].data();
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       double Ua;
-      if (model.parent[i] == 0 && !model.floating) {  // a = [0; R^T ag] (gamma = 0)
+      if (parent[i] == 0 && fixed) {  // a = [0; R^T ag] (gamma = 0)
         a[0] = a[1] = a[2] = 0;
-        detail::rotate_back<J.form>(data.Xup[i].R.data(), ag[3], ag[4], ag[5], a + 3);
+        detail::rotate_back<J.form>(Xup[i].R.data(), ag[3], ag[4], ag[5], a + 3);
         Ua = U[3] * a[3] + U[4] * a[4] + U[5] * a[5];
       } else {
-        detail::inv_motion<J.form, J.offset>(data.Xup[i], data.A[model.parent[i]].data(), a);
-        const double* c = data.c[i].data();
+        detail::inv_motion<J.form, J.offset>(Xup[i], As[parent[i]].data(), a);
+        const double* c = cs[i].data();
         Ua = 0;
         for (int r = 0; r < 6; ++r) {
           a[r] += c[r];
           Ua += U[r] * a[r];
         }
       }
-      const double qdd = (data.u[iv] - Ua) * data.Dinv[iv];
+      const double qdd = (us[iv] - Ua) * Dinvs[iv];
       a[J.axis] += qdd;
-      data.ddq[iv] = qdd;
+      ddq[iv] = qdd;
     });
   }
   return data.ddq;
