@@ -425,13 +425,9 @@ TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
     c.point = Vec3(2 + ((k & 1) ? 0.1 : -0.1), (k & 2) ? 0.1 : -0.1, k < 4 ? 0.0 : 0.2);
     contacts.push_back(c);
   }
-  ContactBodies cb;
-  cb.models = &models;
-  cb.states = &states;
-  cb.a_free = &a_free;
-  cb.contacts = &contacts;
-  cb.objects = &objects;
-  EXPECT_EQ(steps_with_bodies_allocations(cs, sc, m, cb), 0);
+  EXPECT_EQ(
+      steps_with_bodies_allocations(cs, sc, m, {&models, &states, &a_free, &contacts, &objects}),
+      0);
   EXPECT_LT(states[1].v.norm(), 1e-3);  // the contacts held the boxes
 }
 
@@ -470,13 +466,9 @@ TEST(Alloc, LazyDelassusColumnsAllocateNothing) {
     c.depth = k < 4 ? 0.0 : -0.005;
     contacts.push_back(c);
   }
-  ContactBodies cb;
-  cb.models = &models;
-  cb.states = &states;
-  cb.a_free = &a_free;
-  cb.contacts = &contacts;
-  cb.objects = &objects;
-  EXPECT_EQ(steps_with_bodies_allocations(cs, sc, m, cb), 0);
+  EXPECT_EQ(
+      steps_with_bodies_allocations(cs, sc, m, {&models, &states, &a_free, &contacts, &objects}),
+      0);
   EXPECT_LT(cs.report().delassus_columns, cs.report().rows / 2);  // the lazy path was taken
   EXPECT_LT(states[0].v.norm(), 1e-3);                            // the corners held the box
 }

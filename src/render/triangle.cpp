@@ -836,8 +836,9 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     }
     const unsigned counted_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(counted))) & ~slow;
     drawn += std::size_t(__builtin_popcount(counted_m));
-    unsigned todo = (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
-    if (!todo) continue;
+    unsigned pending =
+        (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
+    if (!pending) continue;
     // The edge functions as draw_boxed computes them: relative to the box's first centre, in
     // canonical winding (b and c swapped where the area is positive).
     const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
@@ -874,8 +875,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
         _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
                                             _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
                             none);
-    todo &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
-    if (!todo) continue;
+    pending &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
+    if (!pending) continue;
     const unsigned front_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(front)));
     const unsigned swap_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(swap)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), bx0);
@@ -911,8 +912,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
       _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[17]), bits);
     }
     do {
-      const int k = __builtin_ctz(todo);
-      todo &= todo - 1;
+      const int k = __builtin_ctz(pending);
+      pending &= pending - 1;
       const uint32_t a = g[3 * k], b = g[3 * k + 1], c = g[3 * k + 2];
       if (slow >> k & 1u) {
         drawn += indexed_one<2>(v, a, b, c, rgb, cull, outward, T, clip, ctx);
@@ -933,7 +934,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                      {kk[a], kk[q], kk[r]},
                      lanes[17][k]};
       draw_edges<2>(eg, rgb, T);
-    } while (todo);
+    } while (pending);
   }
   for (; i < count; ++i) {
     drawn +=
