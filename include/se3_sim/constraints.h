@@ -156,6 +156,7 @@ struct ConstraintReport {
   double penetration = 0;             ///< deepest contact penetration (m, >= 0)
   double limit_violation = 0;         ///< largest excursion beyond a joint limit (>= 0)
   int delassus_columns = 0;  ///< W's columns the last solve formed (rows: the full product)
+  std::uint64_t fallbacks = 0;  ///< active-set solves that fell back to PGS (cumulative)
 };
 
 /// What a velocity step works on beside the robot: the free bodies' states and free

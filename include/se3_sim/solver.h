@@ -13,14 +13,17 @@
 //     together, projected on the disc), warm-started from p; cheap, but soft where impulses
 //     must travel through many contacts (stacks) within few sweeps;
 //   - solve_active_set: a Newton-type direct method (the active-set form of semi-smooth Newton
-//     on the complementarity conditions): guess which contacts separate, stick or slide (in
-//     which direction), solve the linear system of the active rows exactly (LU with partial
-//     pivoting, a relative regularization `regularization` W_ii on the diagonal for redundant
-//     contacts), update the guess from the signs it violates, repeat; then a few PGS sweeps
-//     from the result make it feasible to rounding. Exact on stacks where PGS is soft. When
-//     the guess returns to the one of two updates before (a contact flipping on and off, or
-//     between sticking and sliding, while another flips back), the flipping rows keep their
-//     new guess and the others go on; the polish then corrects what the frozen rows violate.
+//     on the complementarity conditions, Alart and Curnier's for friction): guess which contacts
+//     separate, stick or slide, solve the linear system of the active rows exactly (LU with
+//     partial pivoting, a relative regularization `regularization` W_ii on the diagonal for
+//     redundant contacts), a sliding contact's friction rows replaced by Newton's linearization
+//     of p_t = mu p_n z / |z| (z = p_t - r_t / w, w its friction rows' mean W_tt), classify
+//     every contact again from the result (first from the warm start: r = c + W p), repeat;
+//     then a few PGS sweeps from the result make it feasible to rounding. Exact on stacks
+//     where PGS is soft. When the guess returns to the one of two updates before (a contact
+//     flipping on and off, or between sticking and sliding, while another flips back), the
+//     flipping rows keep their new guess and the others go on; the polish then corrects what
+//     the frozen rows violate.
 //     It reads W by columns, and only those of the rows that carry impulse (W symmetric:
 //     r = c + sum over those rows j of W(:, j) p_j); on W's lazy columns (DelassusColumns,
 //     constraint.h) it forms just those, so a problem whose contacts mostly carry no load (a
@@ -65,7 +68,8 @@ struct SolverWorkspace {
   std::vector<int> var, piv;         ///< active-set variable rows, LU pivots
   std::vector<int> slot;             ///< per row: its column in the active-set system (or -1)
   std::vector<int> state;            ///< per row: the active-set guess
-  std::vector<Eigen::Vector2d> dir;  ///< per normal row: the sliding direction
+  std::vector<Eigen::Vector2d> dir;  ///< per normal row: the sliding direction u = z / |z|
+  std::vector<double> shrink;        ///< per normal row, sliding: k = mu p_n / |z| (< 1)
   std::vector<int> state1, state2;   ///< active-set: the guesses one and two updates back
   std::vector<std::uint8_t> frozen;  ///< active-set: rows whose guess a two-cycle froze
   int equality_size = -1;

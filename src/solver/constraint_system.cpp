@@ -605,6 +605,9 @@ bool ConstraintSystem::unilateral_within_reach(const State& x, const VecX& a_fre
   return false;
 }
 
+// A friction impulse within this (relative) of its disc's edge: the contact slid.
+constexpr double kSlidEdge = 1e-6;
+
 void ConstraintSystem::warm_start_external(int r, const Contact& ct) {
   // The nearest of last step's contacts of the same pair, within a radius: contacts that move
   // less than that per step keep their impulse (resting and slowly sliding ones).
@@ -618,12 +621,22 @@ void ConstraintSystem::warm_start_external(int r, const Contact& ct) {
     if (d2 < best) best = d2, from = &w;
   }
   if (!from) return;
-  // The normal impulse only: the active set's first guess is then "sticking" for a contact
-  // that carried load (a stack's upper contacts, whose free residual is zero since both boxes
-  // fall alike, would start separated and cost an update each). A friction impulse at the
-  // disc's edge would start it sliding, and its direction updates converge slowly (seen on
-  // panda_push: 30 updates a step, then divergence).
-  p_[r] = std::max(0.0, from->impulse.dot(ct.normal));
+  // The normal impulse: the active set's first guess is then "sticking" for a contact that
+  // carried load (a stack's upper contacts, whose free residual is zero since both boxes fall
+  // alike, would start separated and cost an update each). A contact whose friction was on its
+  // disc's edge slid: its friction impulse too, in the new tangent basis and on the new disc's
+  // edge, so that the active set's first guess classifies it from its residuals (sliding on, in
+  // which direction, or sticking) instead of starting it sticking.
+  const double dn = from->impulse.dot(ct.normal), pn = std::max(0.0, dn);
+  p_[r] = pn;
+  const double lim = rows_.mu[r] * pn, edge = lim * (1 - kSlidEdge);
+  if (!(lim > 0) || from->impulse.squaredNorm() - dn * dn < edge * edge) return;
+  Vec3 t1, t2;
+  tangent_basis(ct.normal, t1, t2);  // the basis add_contact_rows uses
+  const double f1 = from->impulse.dot(t1), f2 = from->impulse.dot(t2);
+  const double s = lim / std::sqrt(f1 * f1 + f2 * f2);
+  p_[rows_.friction[r]] = s * f1;
+  p_[rows_.friction2[r]] = s * f2;
 }
 
 bool ConstraintSystem::row_masks(int rows) {
@@ -796,6 +809,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     it = st.iterations;
     change = st.change;
     report_.delassus_columns = st.columns;
+    if (st.fallback) ++report_.fallbacks;
   }
   x.v = vfree_.head(nvr);
   for (size_t j = 0; j < free_.size(); ++j) (*in.bodies)[j].v = vfree_.segment<6>(nvr + 6 * j);

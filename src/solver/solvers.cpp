@@ -14,7 +14,7 @@ constexpr double kTinyPivot = 1e-14;  // a row whose W_ii is below this has no e
 // Active-set guesses, per row.
 constexpr int kInactive = 0;  // limit or normal: no impulse (separating)
 constexpr int kStick = 1;     // limit or normal: active; a contact's friction rows too (r_t = 0)
-constexpr int kSlide = 2;     // contact: normal active, friction mu p_n along dir (r_t != 0)
+constexpr int kSlide = 2;     // contact: normal active, friction on the disc's edge (r_t != 0)
 
 bool unilateral(RowType t) {
   return t == RowType::JointLimit || t == RowType::ContactNormal;
@@ -86,6 +86,7 @@ void SolverWorkspace::reserve(int capacity, int equality_rows) {
   slot.assign(capacity, -1);
   state.assign(capacity, kInactive);
   dir.assign(capacity, Eigen::Vector2d::Zero());
+  shrink.assign(capacity, 0.0);
   state1.assign(capacity, kInactive);
   state2.assign(capacity, kInactive);
   frozen.assign(capacity, 0);
@@ -173,10 +174,11 @@ namespace {
 
 constexpr double kVelTol = 1e-9;   // m/s: residuals below this count as zero
 constexpr double kImpTol = 1e-12;  // N s
-// A sliding direction within this of the one the slip asks for has settled: on panda_push the
-// directions of two sliding corners converge at a rate near 1 (the slip follows the friction
-// direction), 1e-9 took more than the 30 updates where 1e-6 is reached within them.
+// A sliding direction within this of the one of the last update has settled (Newton's updates
+// of the direction converge quadratically: the next one would move it by about its square).
 constexpr double kDirTol = 1e-6;
+// A warm friction impulse within this (relative) of its disc's edge: the contact slid.
+constexpr double kEdge = 1e-6;
 
 // W read by columns, all of them there (the full product)...
 struct DenseColumns {
@@ -265,26 +267,8 @@ SolverStats pgs_on_residuals(Cols& W, const ConstraintRows& rows, VecX& p, VecX&
   return st;
 }
 
-// The first guess from the warm start (or, without one, from the free residual).
-void first_guess(const VecX& c, const ConstraintRows& rows, const VecX& p, SolverWorkspace& ws) {
-  for (int r = 0; r < rows.count; ++r) {
-    if (!unilateral(rows.type[r])) continue;
-    ws.state[r] = kInactive;
-    if (!starts_active(c, p, r)) continue;
-    ws.state[r] = kStick;
-    const int f1 = rows.friction[r];
-    if (f1 != ConstraintRows::kNone && p[r] > 0) {
-      const Eigen::Vector2d pt(p[f1], p[rows.friction2[r]]);
-      if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) && pt.norm() > 0) {
-        ws.state[r] = kSlide;
-        ws.dir[r] = pt.normalized();
-      }
-    }
-  }
-}
-
-// The active set's unknowns: equality rows, active limits and normals, sticking contacts'
-// friction rows (their count).
+// The active set's unknowns: equality rows, active limits and normals, the friction rows of
+// every active contact (sticking or sliding) (their count).
 int active_variables(const ConstraintRows& rows, SolverWorkspace& ws) {
   int m = 0;
   for (int r = 0; r < rows.count; ++r) ws.slot[r] = -1;
@@ -294,8 +278,7 @@ int active_variables(const ConstraintRows& rows, SolverWorkspace& ws) {
     if (t != RowType::Equality && ws.state[r] == kInactive) continue;
     ws.slot[r] = m;
     ws.var[m++] = r;
-    if (t == RowType::ContactNormal && ws.state[r] == kStick &&
-        rows.friction[r] != ConstraintRows::kNone) {
+    if (t == RowType::ContactNormal && rows.friction[r] != ConstraintRows::kNone) {
       ws.slot[rows.friction[r]] = m;
       ws.var[m++] = rows.friction[r];
       ws.slot[rows.friction2[r]] = m;
@@ -305,8 +288,53 @@ int active_variables(const ConstraintRows& rows, SolverWorkspace& ws) {
   return m;
 }
 
+// A contact's friction rows' mean pivot: the scale that weighs its slip r_t against its
+// friction impulse p_t (z = p_t - r_t / w, Alart and Curnier's augmented variable).
+template <class Cols>
+double friction_scale(Cols& W, const ConstraintRows& rows, int normal) {
+  return 0.5 * (W.diag(rows.friction[normal]) + W.diag(rows.friction2[normal]));
+}
+
+// p_t - r_t / w: inside the disc of radius mu p_n the contact sticks (r_t = 0, p_t = z); outside,
+// it slides with p_t = mu p_n z / |z| (friction on the edge, opposing the slip).
+Eigen::Vector2d augmented_friction(const ConstraintRows& rows, int normal, const VecX& p,
+                                   const VecX& r, double w) {
+  const int f1 = rows.friction[normal], f2 = rows.friction2[normal];
+  const double inv = w > kTinyPivot ? 1.0 / w : 0.0;
+  return Eigen::Vector2d(p[f1] - inv * r[f1], p[f2] - inv * r[f2]);
+}
+
+// A sliding contact's two friction equations in place of its rows of W p = -c: Newton's
+// linearization of p_t = mu p_n z / |z| at the last iterate (direction u = z / |z|, k = mu p_n /
+// |z| < 1, e the unit normal to u in the plane). Along u: u.p_t - mu p_n = 0. Across:
+// k e.(c_t + W_t p) + (1 - k) w e.p_t = 0, so the direction follows the slip's response to it
+// (the slip's derivative): a fixed-point update of the direction alone converges at a rate near
+// 1 where the slip follows the friction direction (two sliding corners of one box).
+template <class Cols>
+void sliding_rows(Cols& W, const ConstraintRows& rows, int normal, int m, SolverWorkspace& ws) {
+  const int sn = ws.slot[normal];
+  const int s1 = ws.slot[rows.friction[normal]], s2 = ws.slot[rows.friction2[normal]];
+  const Eigen::Vector2d& u = ws.dir[normal];
+  const Eigen::Vector2d e(-u[1], u[0]);
+  const double k = ws.shrink[normal];
+  const double soft = (1 - k) * friction_scale(W, rows, normal);
+  for (int j = 0; j < m; ++j) {
+    double* a = &ws.A(0, j);
+    const double across = k * (e[0] * a[s1] + e[1] * a[s2]);
+    a[s1] = 0;
+    a[s2] = across;
+  }
+  ws.A(s1, s1) = u[0];
+  ws.A(s1, s2) = u[1];
+  ws.A(s1, sn) = -rows.mu[normal];
+  ws.A(s2, s1) += soft * e[0];
+  ws.A(s2, s2) += soft * e[1];
+  ws.x[s2] = k * (e[0] * ws.x[s1] + e[1] * ws.x[s2]);
+  ws.x[s1] = 0;
+}
+
 // The guess's linear system in ws.A and ws.x: column by column (W symmetric: W(ri, rj) =
-// W(rj, ri), read down column rj).
+// W(rj, ri), read down column rj), then each sliding contact's friction equations.
 template <class Cols>
 void active_system(Cols& W, const VecX& c, const ConstraintRows& rows, int m, SolverWorkspace& ws,
                    double regularization) {
@@ -315,55 +343,99 @@ void active_system(Cols& W, const VecX& c, const ConstraintRows& rows, int m, So
     double* a = &ws.A(0, j);
     const double* wj = W.col(rj);
     for (int i = 0; i < m; ++i) a[i] = wj[ws.var[i]];
-    if (ws.state[rj] == kSlide && rows.type[rj] == RowType::ContactNormal) {
-      const Eigen::Vector2d& d = ws.dir[rj];
-      const double s1 = rows.mu[rj] * d[0], s2 = rows.mu[rj] * d[1];
-      const double* w1 = W.col(rows.friction[rj]);
-      const double* w2 = W.col(rows.friction2[rj]);
-      for (int i = 0; i < m; ++i) a[i] += s1 * w1[ws.var[i]] + s2 * w2[ws.var[i]];
-    }
     a[j] += regularization * W.diag(rj) + 1e-300;
     ws.x[j] = -c[rj];
   }
+  for (int j = 0; j < m; ++j) {
+    const int r = ws.var[j];
+    if (rows.type[r] == RowType::ContactNormal && ws.state[r] == kSlide) {
+      sliding_rows(W, rows, r, m, ws);
+    }
+  }
 }
 
-// Updates the guess from the signs that p and the residuals ws.r violate; true when it changed.
-bool update_guess(const ConstraintRows& rows, const VecX& p, SolverWorkspace& ws) {
+// A unilateral row's guess from its impulses p and residuals r (Alart and Curnier's
+// classification): an active row whose impulse pulls (p < 0) separates, an inactive one that
+// approaches (r < 0) becomes active; an active contact sticks while its augmented friction
+// z = p_t - r_t / w lies in the disc of radius mu z_n (z_n = p_n - r_n / W_nn, the normal's
+// augmented impulse), and slides along u = z / |z| with k = mu z_n / |z| otherwise. `solved`:
+// p solves the guess's system, so an active row's r_n and a sticking contact's r_t are zero
+// (z_n = p_n, z = p_t, read without W). True when the guess changed or a sliding direction
+// moved by more than kDirTol.
+template <class Cols>
+bool classify(Cols& W, const ConstraintRows& rows, const VecX& p, const VecX& r, int row,
+              bool solved, SolverWorkspace& ws) {
+  int& s = ws.state[row];
+  const int before = s;
+  if (s != kInactive && p[row] < -kImpTol) {
+    s = kInactive;
+    return true;
+  }
+  if (s == kInactive && !(r[row] < -kVelTol)) return false;
+  const int f1 = rows.friction[row], f2 = rows.friction2[row];
+  if (f1 == ConstraintRows::kNone) {
+    s = kStick;
+    return s != before;
+  }
+  double zn = p[row];
+  if (!(solved && before != kInactive)) {
+    const double wnn = W.diag(row);
+    zn = std::max(0.0, p[row] - (wnn > kTinyPivot ? r[row] / wnn : 0.0));
+  }
+  Eigen::Vector2d z(p[f1], p[f2]);
+  if (!(solved && before == kStick)) {
+    z = augmented_friction(rows, row, p, r, friction_scale(W, rows, row));
+  }
+  const double lim = rows.mu[row] * zn, len = z.norm();
+  if (len <= lim * (1 + 1e-9) + kImpTol) {
+    s = kStick;
+    return s != before;
+  }
+  const Eigen::Vector2d u = z / len;
+  const bool moved = before != kSlide || (u - ws.dir[row]).norm() > kDirTol;
+  s = kSlide;
+  ws.dir[row] = u;
+  ws.shrink[row] = lim / len;
+  return moved;
+}
+
+// c_j + (W p)_j (W symmetric: column j in place of row j).
+template <class Cols>
+double residual(Cols& W, const VecX& c, const VecX& p, int n, int j) {
+  const double* w = W.col(j);
+  double s = c[j];
+  for (int i = 0; i < n; ++i) s += w[i] * p[i];
+  return s;
+}
+
+// The first guess from the warm start: a row with warm impulse or approaching (c < 0) is
+// active. A contact whose warm friction lies on the disc's edge slid in the last step: it is
+// classified from its residuals under the warm start (r = c + W p, its three rows), so that it
+// starts sliding where it still slides instead of sticking for one update.
+template <class Cols>
+void first_guess(Cols& W, const VecX& c, const ConstraintRows& rows, const VecX& p,
+                 SolverWorkspace& ws) {
+  const int n = rows.count;
+  for (int r = 0; r < n; ++r) {
+    if (!unilateral(rows.type[r])) continue;
+    ws.state[r] = starts_active(c, p, r) ? kStick : kInactive;
+    const int f1 = rows.friction[r], f2 = rows.friction2[r];
+    if (f1 == ConstraintRows::kNone || !(p[r] > 0)) continue;
+    const double edge = rows.mu[r] * p[r] * (1 - kEdge);
+    if (p[f1] * p[f1] + p[f2] * p[f2] < edge * edge) continue;
+    for (int j : {r, f1, f2}) ws.r[j] = residual(W, c, p, n, j);
+    classify(W, rows, p, ws.r, r, false, ws);
+  }
+}
+
+// Updates the guess from the last solve's p and residuals ws.r (classify, every row that no
+// two-cycle froze); true when it changed.
+template <class Cols>
+bool update_guess(Cols& W, const ConstraintRows& rows, const VecX& p, SolverWorkspace& ws) {
   bool changed = false;
   for (int r = 0; r < rows.count; ++r) {
     if (!unilateral(rows.type[r]) || ws.frozen[r]) continue;
-    int& s = ws.state[r];
-    if (s != kInactive && p[r] < -kImpTol) {
-      s = kInactive;
-      changed = true;
-      continue;
-    }
-    if (s == kInactive) {
-      if (ws.r[r] < -kVelTol) s = kStick, changed = true;
-      continue;
-    }
-    const int f1 = rows.friction[r];
-    if (f1 == ConstraintRows::kNone) continue;
-    const int f2 = rows.friction2[r];
-    if (s == kStick) {
-      const Eigen::Vector2d pt(p[f1], p[f2]);
-      if (pt.norm() > rows.mu[r] * p[r] * (1 + 1e-9) + kImpTol) {
-        s = kSlide;
-        ws.dir[r] = pt.normalized();
-        changed = true;
-      }
-    } else {
-      const Eigen::Vector2d rt(ws.r[f1], ws.r[f2]);
-      if (rt.norm() <= kVelTol) continue;
-      const Eigen::Vector2d want = -rt / rt.norm();  // friction opposes the slip
-      if (want.dot(ws.dir[r]) < 0) {
-        s = kStick;
-        changed = true;
-      } else if ((want - ws.dir[r]).norm() > kDirTol) {
-        ws.dir[r] = (ws.dir[r] + want).normalized();
-        changed = true;
-      }
-    }
+    changed = classify(W, rows, p, ws.r, r, true, ws) || changed;
   }
   return changed;
 }
@@ -389,7 +461,7 @@ template <class Cols>
 bool active_set_updates(Cols& W, const VecX& c, const ConstraintRows& rows, VecX& p,
                         SolverWorkspace& ws, const SolverOptions& opt, SolverStats& st) {
   const int n = rows.count;
-  first_guess(c, rows, p, ws);
+  first_guess(W, c, rows, p, ws);
   for (int r = 0; r < n; ++r) ws.frozen[r] = 0;
   bool converged = false;
   int it = 0;
@@ -401,16 +473,9 @@ bool active_set_updates(Cols& W, const VecX& c, const ConstraintRows& rows, VecX
     if (m > 0 && !lu_solve(ws.A, m, ws.piv, ws.x)) break;  // the caller's fallback
     for (int r = 0; r < n; ++r) p[r] = 0;
     for (int i = 0; i < m; ++i) p[ws.var[i]] = ws.x[i];
-    for (int r = 0; r < n; ++r) {
-      if (rows.type[r] == RowType::ContactNormal && ws.state[r] == kSlide) {
-        const double ft = rows.mu[r] * p[r];
-        p[rows.friction[r]] = ft * ws.dir[r][0];
-        p[rows.friction2[r]] = ft * ws.dir[r][1];
-      }
-    }
     residuals(W, c, p, n, ws.r);
     for (int r = 0; r < n; ++r) ws.state1[r] = ws.state[r];  // the guess just solved
-    if (!update_guess(rows, p, ws)) {
+    if (!update_guess(W, rows, p, ws)) {
       converged = true;
       break;
     }
