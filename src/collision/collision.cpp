@@ -132,20 +132,23 @@ double nearest_picked(const double* u, const double* v, double lu, double lv, do
   double far = -INFINITY;
   int k = 0;
 #ifdef __SSE2__
-  const __m128d pu = _mm_set1_pd(lu), pv = _mm_set1_pd(lv);
-  __m128d fars = _mm_set1_pd(-INFINITY);
-  for (; k + 2 <= n; k += 2) {
-    const __m128d du = _mm_sub_pd(_mm_loadu_pd(u + k), pu);
-    const __m128d dv = _mm_sub_pd(_mm_loadu_pd(v + k), pv);
-    const __m128d dk = _mm_add_pd(_mm_mul_pd(du, du), _mm_mul_pd(dv, dv));
-    // min(new, old) keeps old when equal, as std::min(old, new); max(d, far) skips a NaN d.
-    const __m128d m = _mm_min_pd(dk, _mm_loadu_pd(d + k));
-    _mm_storeu_pd(d + k, m);
-    fars = _mm_max_pd(m, fars);
+  // (A few candidates, a box's corners: the scalar loop below costs less than the set-up.)
+  if (n >= 16) {
+    const __m128d pu = _mm_set1_pd(lu), pv = _mm_set1_pd(lv);
+    __m128d fars = _mm_set1_pd(-INFINITY);
+    for (; k + 2 <= n; k += 2) {
+      const __m128d du = _mm_sub_pd(_mm_loadu_pd(u + k), pu);
+      const __m128d dv = _mm_sub_pd(_mm_loadu_pd(v + k), pv);
+      const __m128d dk = _mm_add_pd(_mm_mul_pd(du, du), _mm_mul_pd(dv, dv));
+      // min(new, old) keeps old when equal, as std::min(old, new); max(d, far) skips a NaN d.
+      const __m128d m = _mm_min_pd(dk, _mm_loadu_pd(d + k));
+      _mm_storeu_pd(d + k, m);
+      fars = _mm_max_pd(m, fars);
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, fars);
+    far = lanes[0] > lanes[1] ? lanes[0] : lanes[1];
   }
-  double lanes[2];
-  _mm_storeu_pd(lanes, fars);
-  far = lanes[0] > lanes[1] ? lanes[0] : lanes[1];
 #endif
   for (; k < n; ++k) {
     const double du = u[k] - lu, dv = v[k] - lv;
