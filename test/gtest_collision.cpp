@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "se3_sim/collision.h"
 
@@ -237,6 +238,129 @@ TEST(Collision, MeshHullOnItsFaceGivesSpreadContacts) {
       EXPECT_GE(std::hypot(dp.x(), dp.y()), 0.99 * std::sqrt(2.0) * r) << i << " " << j;
     }
   }
+}
+
+namespace {
+
+// The contacts a hull on the ground z = 0 should give, by the plain rule (collision.md): every
+// vertex below the margin a candidate, the deepest first (the first of equal ones), then each next
+// the candidate farthest across the normal from those picked (the first of equal ones, if farther
+// than 1e-12 in squared distance), at most max, sorted deepest first; each point midway between
+// the vertex and the plane. The arithmetic is the layer's (gaps in the shape's frame), so the
+// contacts must agree to the bit.
+std::vector<Contact> reference_ground_contacts(const ConvexHull& h, const SE3& T, double margin,
+                                               int max) {
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 nl = T.R.transpose() * n;
+  const double d0 = n.dot(T.p);
+  const int nv = int(h.vertices.size());
+  std::vector<double> g(nv);
+  for (int i = 0; i < nv; ++i) {
+    const Vec3& v = h.vertices[i];
+    g[i] = ((nl.x() * v.x() + nl.y() * v.y()) + nl.z() * v.z()) + d0;
+  }
+  std::vector<int> cand;
+  for (int i = 0; i < nv; ++i) {
+    if (g[i] < margin) cand.push_back(i);
+  }
+  std::vector<int> picked;
+  if (cand.empty()) return {};
+  int deepest = cand[0];
+  for (int i : cand) {
+    if (g[i] < g[deepest]) deepest = i;
+  }
+  picked.push_back(deepest);
+  int axis = 0;
+  nl.cwiseAbs().minCoeff(&axis);
+  const Vec3 t1 = nl.cross(Vec3::Unit(axis)).normalized(), t2 = nl.cross(t1);
+  std::vector<double> d(cand.size(), INFINITY);
+  while (int(picked.size()) < max && cand.size() > 1) {
+    const Vec3& last = h.vertices[picked.back()];
+    const double lu = t1.dot(last), lv = t2.dot(last);
+    int best = -1;
+    double best_d = 1e-12;
+    for (std::size_t k = 0; k < cand.size(); ++k) {
+      const Vec3& v = h.vertices[cand[k]];
+      const double du = t1.dot(v) - lu, dv = t2.dot(v) - lv;
+      d[k] = std::min(d[k], du * du + dv * dv);
+      if (d[k] > best_d) best_d = d[k], best = int(k);
+    }
+    if (best < 0) break;
+    picked.push_back(cand[best]);
+  }
+  std::sort(picked.begin(), picked.end(), [&](int x, int y) { return g[x] < g[y]; });
+  std::vector<Contact> out;
+  for (int i : picked) {
+    Contact c;
+    c.depth = -g[i];
+    c.normal = n;
+    c.point = T.p + T.R * h.vertices[i] + c.depth / 2 * n;
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
+// Hulls on the ground at random turns and heights (the lowest vertex 3 mm deep to 12 mm up,
+// 1 cm margin), 1 to 6 contacts a pair: the contacts are the plain rule's above, to the bit.
+// Solo-12's foot and lower leg (hundreds of vertices, most of the foot's bottom within the
+// margin), and a cylinder and a box, upright too, whose equal gaps and equal distances test that
+// the first of equal candidates is picked.
+TEST(Collision, HullOnTheGroundPicksThePlainRulesContacts) {
+  const std::string dir =
+      kRoot + "/data/meshes/example-robot-data/robots/solo_description/meshes/stl/with_foot/";
+  std::vector<Shape> shapes;
+  for (const char* f : {"solo_foot.stl", "solo_lower_leg_left_side.stl"}) {
+    Shape s;
+    std::string err;
+    ASSERT_TRUE(load_mesh_shape(
+        dir + f, Vec3::Ones(), [](const std::string& u, std::string*) { return u; }, s, &err))
+        << err;
+    shapes.push_back(s);
+  }
+  Shape cyl;
+  cyl.type = ShapeType::Mesh;
+  cyl.mesh = std::make_shared<TriangleMesh>(tessellate(make_cylinder(0.05, 0.1), 48));
+  shapes.push_back(cyl);
+  Shape box;
+  box.type = ShapeType::Mesh;
+  box.mesh = std::make_shared<TriangleMesh>(tessellate(make_box(Vec3(0.1, 0.06, 0.04))));
+  shapes.push_back(box);
+  std::srand(7);
+  auto uniform = [](double a, double b) { return a + (b - a) * std::rand() / double(RAND_MAX); };
+  int compared = 0, many = 0;
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    for (int max = 1; max <= 6; ++max) {
+      CollisionOptions opt;
+      opt.margin = 0.01;
+      opt.max_contacts_per_pair = max;
+      CollisionModel m({ground(), object("hull", shapes[s], 0)}, opt);
+      const ConvexHull& h = *m.hull(1);
+      CollisionData data;
+      for (int trial = 0; trial < 40; ++trial) {
+        const Mat3 R =
+            trial < 4 ? Mat3::Identity()
+                      : rot(Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)), uniform(0, 3.1));
+        double lowest = INFINITY;
+        for (const Vec3& v : h.vertices) lowest = std::min(lowest, (R * v).z());
+        const SE3 T = at(uniform(-1, 1), uniform(-1, 1), -lowest + uniform(-0.003, 0.012), R);
+        collide(m, data, {T});
+        const std::vector<Contact> want = reference_ground_contacts(h, T, opt.margin, max);
+        ASSERT_EQ(data.contacts.size(), want.size()) << s << " " << max << " " << trial;
+        for (std::size_t k = 0; k < want.size(); ++k) {
+          EXPECT_EQ(data.contacts[k].depth, want[k].depth) << s << " " << max << " " << trial;
+          EXPECT_EQ(data.contacts[k].point, want[k].point) << s << " " << max << " " << trial;
+          EXPECT_EQ(data.contacts[k].a, 0);
+          EXPECT_EQ(data.contacts[k].b, 1);
+        }
+        ++compared;
+        many += want.size() >= 3;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 4 * 6 * 40);
+  EXPECT_GT(many, compared / 3);  // most placements sample three or more contacts
 }
 
 // The narrow phase is skipped for pairs whose bounding boxes are farther apart than the margin

@@ -7,6 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -121,6 +124,40 @@ void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
   }
 }
 
+// d[k] = min(d[k], (u[k] - lu)^2 + (v[k] - lv)^2) over k < n, the distance of each candidate to
+// the nearest picked point after picking (lu, lv); returns the largest d[k] (-inf for n = 0).
+// Two candidates at a time where SSE2 is there, with the same operations in each lane as the
+// scalar loop (no fused multiply-add), so both give the same bits.
+double nearest_picked(const double* u, const double* v, double lu, double lv, double* d, int n) {
+  double far = -INFINITY;
+  int k = 0;
+#ifdef __SSE2__
+  // (A few candidates, a box's corners: the scalar loop below costs less than the set-up.)
+  if (n >= 16) {
+    const __m128d pu = _mm_set1_pd(lu), pv = _mm_set1_pd(lv);
+    __m128d fars = _mm_set1_pd(-INFINITY);
+    for (; k + 2 <= n; k += 2) {
+      const __m128d du = _mm_sub_pd(_mm_loadu_pd(u + k), pu);
+      const __m128d dv = _mm_sub_pd(_mm_loadu_pd(v + k), pv);
+      const __m128d dk = _mm_add_pd(_mm_mul_pd(du, du), _mm_mul_pd(dv, dv));
+      // min(new, old) keeps old when equal, as std::min(old, new); max(d, far) skips a NaN d.
+      const __m128d m = _mm_min_pd(dk, _mm_loadu_pd(d + k));
+      _mm_storeu_pd(d + k, m);
+      fars = _mm_max_pd(m, fars);
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, fars);
+    far = lanes[0] > lanes[1] ? lanes[0] : lanes[1];
+  }
+#endif
+  for (; k < n; ++k) {
+    const double du = u[k] - lu, dv = v[k] - lv;
+    d[k] = std::min(d[k], du * du + dv * dv);
+    if (d[k] > far) far = d[k];
+  }
+  return far;
+}
+
 // Up to max of the candidates below the margin: the deepest first, then each next the one
 // farthest (across the normal) from those already picked, so that a resting face keeps its
 // corners (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first;
@@ -159,17 +196,12 @@ void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, 
     std::fill(d, d + nc, INFINITY);
     double lu = t1.dot(pts[deepest]), lv = t2.dot(pts[deepest]);
     while (int(picked.size()) < max) {
-      int best = -1;
-      double best_d = 1e-12;  // a point that coincides with a picked one adds nothing
-      for (int k = 0; k < nc; ++k) {
-        const double du = cu[k] - lu, dv = cv[k] - lv;
-        d[k] = std::min(d[k], du * du + dv * dv);
-        if (d[k] > best_d) {
-          best_d = d[k];
-          best = k;
-        }
-      }
-      if (best < 0) break;
+      // The first of the farthest, if farther than 1e-12 (a point that coincides with a picked
+      // one adds nothing).
+      const double far = nearest_picked(cu, cv, lu, lv, d, nc);
+      if (!(far > 1e-12)) break;
+      int best = 0;
+      while (!(d[best] == far)) ++best;
       picked.push_back(cs[best]);
       lu = cu[best];
       lv = cv[best];
