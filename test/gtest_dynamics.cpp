@@ -703,6 +703,7 @@ TEST(Dynamics, JointFormsGiveTheGeneralFormsNumbers) {
     for (int i = 1; i <= general.n; ++i) {
       general.joints[i].z_rotation = false;
       general.joints[i].axis_row = -1;
+      general.joints[i].kind = general.joints[i].dispatch_kind();
       row_forms += c.model.joints[i].axis_row >= 0;
     }
     Data d(c.model), dg(general);

@@ -58,6 +58,12 @@ struct JointModel {
   /// The components of X_tree's offset p that are nonzero, bit k for p[k] (7: all): a revolute
   /// joint's cross products with p skip the others (src/dynamics/joint.h). Model::finalize sets it.
   unsigned char offset_axes = 7;
+  /// The recursions' dispatch index (src/dynamics/joint.h, with_joint): the type, the form and
+  /// offset_axes above in one byte, so that a body's step is reached by one indexed jump instead
+  /// of a test per field. Revolute: 8 form + offset_axes, form 0 (general), 1 (z_rotation) or
+  /// 2 + axis_row; prismatic: 40 + z_rotation; the base's joints: 42. Model::finalize sets it
+  /// (dispatch_kind()); whoever changes the fields above calls it again.
+  unsigned char kind = 7;
 
   JointModel() = default;
   explicit JointModel(JointType t);
@@ -70,6 +76,8 @@ struct JointModel {
   /// Whether the joint's coordinate is an angle (a revolute joint; without limits it wraps at
   /// 2 pi, URDF's continuous joint).
   bool angular() const { return type == JointType::Revolute; }
+  /// kind as the type, z_rotation, axis_row and offset_axes give it.
+  unsigned char dispatch_kind() const;
   /// S in the body frame, 6 x nv: e_3, e_6, the identity (free base), empty (fixed base).
   Eigen::Matrix<double, 6, Eigen::Dynamic> motion_subspace() const;
   /// X_tree exp(S q), the body's frame in its parent's, for the joint's nq coordinates at q (the

@@ -190,68 +190,60 @@ struct AxisJoint {
 using RevoluteZ = AxisJoint<2>;
 using PrismaticZ = AxisJoint<5>;
 
-template <int Form, class F>
-SE3_KERNEL decltype(auto) with_revolute(int offset_axes, F&& f) {
-  switch (offset_axes) {
-    case 0:
-      return f(AxisJoint<2, Form, 0>());
-    case 1:
-      return f(AxisJoint<2, Form, 1>());
-    case 2:
-      return f(AxisJoint<2, Form, 2>());
-    case 3:
-      return f(AxisJoint<2, Form, 3>());
-    case 4:
-      return f(AxisJoint<2, Form, 4>());
-    case 5:
-      return f(AxisJoint<2, Form, 5>());
-    case 6:
-      return f(AxisJoint<2, Form, 6>());
-    default:
-      return f(AxisJoint<2, Form, 7>());
-  }
-}
+/// The joint of dispatch index Kind (JointModel::kind): revolute AxisJoint<2, Kind / 8, Kind % 8>
+/// for Kind < 40 (the forms kGeneral, kZ, kAxisRow + k are 0 to 4), prismatic AxisJoint<5,
+/// Kind - 40> for 40 and 41.
+template <int Kind>
+using JointOfKind =
+    std::conditional_t<(Kind < 40), AxisJoint<2, Kind / 8, Kind % 8>, AxisJoint<5, Kind - 40>>;
+
+// The cases of with_joint's switch, eight at a time.
+#define SE3_JOINT_CASE(k) \
+  case k:                 \
+    return f(JointOfKind<k>());
+#define SE3_JOINT_CASES8(b)                                                               \
+  SE3_JOINT_CASE(b)                                                                       \
+  SE3_JOINT_CASE(b + 1)                                                                   \
+  SE3_JOINT_CASE(b + 2) SE3_JOINT_CASE(b + 3) SE3_JOINT_CASE(b + 4) SE3_JOINT_CASE(b + 5) \
+      SE3_JOINT_CASE(b + 6) SE3_JOINT_CASE(b + 7)
 
 /// f(AxisJoint<K, F, PM>()) for the joint of a moving body (Model::validate admits no other joint
 /// on bodies 1..n): K from its type, F its form (z_rotation, axis_row), PM its offset_axes
-/// (revolute).
+/// (revolute), all read from JointModel::kind by one switch (a jump table).
 template <class F>
 SE3_KERNEL decltype(auto) with_joint(const JointModel& j, F&& f) {
-  if (j.type == JointType::Revolute) {
-    if (j.z_rotation) return with_revolute<kZ>(j.offset_axes, f);
-    switch (j.axis_row) {
-      case 0:
-        return with_revolute<kAxisRow>(j.offset_axes, f);
-      case 1:
-        return with_revolute<kAxisRow + 1>(j.offset_axes, f);
-      case 2:
-        return with_revolute<kAxisRow + 2>(j.offset_axes, f);
-      default:
-        return with_revolute<kGeneral>(j.offset_axes, f);
-    }
+  switch (j.kind) {
+    SE3_JOINT_CASES8(0)
+    SE3_JOINT_CASES8(8)
+    SE3_JOINT_CASES8(16)
+    SE3_JOINT_CASES8(24)
+    SE3_JOINT_CASES8(32)
+    SE3_JOINT_CASE(41)
+    default:
+      return f(JointOfKind<40>());
   }
-  if (j.z_rotation) return f(AxisJoint<5, kZ>());
-  return f(AxisJoint<5, kGeneral>());
 }
+#undef SE3_JOINT_CASES8
+#undef SE3_JOINT_CASE
 
 /// with_joint for steps that read no offset (AxisJoint<K, F>, PM = 7): fewer copies of them.
 template <class F>
 SE3_KERNEL decltype(auto) with_joint_form(const JointModel& j, F&& f) {
-  if (j.type == JointType::Revolute) {
-    if (j.z_rotation) return f(AxisJoint<2, kZ>());
-    switch (j.axis_row) {
-      case 0:
-        return f(AxisJoint<2, kAxisRow>());
-      case 1:
-        return f(AxisJoint<2, kAxisRow + 1>());
-      case 2:
-        return f(AxisJoint<2, kAxisRow + 2>());
-      default:
-        return f(AxisJoint<2, kGeneral>());
-    }
+  switch (j.kind >> 3) {
+    case 0:
+      return f(AxisJoint<2, kGeneral>());
+    case 1:
+      return f(AxisJoint<2, kZ>());
+    case 2:
+      return f(AxisJoint<2, kAxisRow>());
+    case 3:
+      return f(AxisJoint<2, kAxisRow + 1>());
+    case 4:
+      return f(AxisJoint<2, kAxisRow + 2>());
+    default:
+      if (j.kind == 41) return f(AxisJoint<5, kZ>());
+      return f(AxisJoint<5, kGeneral>());
   }
-  if (j.z_rotation) return f(AxisJoint<5, kZ>());
-  return f(AxisJoint<5, kGeneral>());
 }
 
 /// out = a b for b = Xup of a joint J (forward kinematics' oMb[parent] Xup[i]): column c of

@@ -47,6 +47,19 @@ unsigned char offset_axes(const Vec3& p) {
 JointModel::JointModel(JointType t) : type(t) {
   nq = (t == JointType::Revolute || t == JointType::Prismatic) ? 1 : 0;
   nv = t == JointType::Free ? 6 : nq;
+  kind = dispatch_kind();
+}
+
+unsigned char JointModel::dispatch_kind() const {
+  const int form = z_rotation ? 1 : axis_row >= 0 ? 2 + axis_row : 0;
+  switch (type) {
+    case JointType::Revolute:
+      return static_cast<unsigned char>(8 * form + (offset_axes & 7));
+    case JointType::Prismatic:
+      return static_cast<unsigned char>(40 + (z_rotation ? 1 : 0));
+    default:
+      return 42;
+  }
 }
 
 Eigen::Matrix<double, 6, Eigen::Dynamic> JointModel::motion_subspace() const {
@@ -134,6 +147,7 @@ void Model::finalize() {
     joints[i].axis_row = axis_row(X_tree[i].R);
     joints[i].offset_axes = offset_axes(X_tree[i].p);
   }
+  for (JointModel& j : joints) j.kind = j.dispatch_kind();
   children.assign(n + 1, {});
   for (int i = 1; i <= n; ++i) children[parent[i]].push_back(i);
   subtree_end.resize(n + 1);
@@ -201,7 +215,8 @@ void Model::validate() const {
         JointModel(j.type).nv != j.nv ||
         (i > 0 &&
          (j.z_rotation != is_z_rotation(X_tree[i].R) || j.axis_row != axis_row(X_tree[i].R) ||
-          j.offset_axes != offset_axes(X_tree[i].p)))) {
+          j.offset_axes != offset_axes(X_tree[i].p))) ||
+        j.kind != j.dispatch_kind()) {
       throw ModelError("model '" + name + "': joint coordinates out of order (finalize())");
     }
     nq_sum += j.nq;
