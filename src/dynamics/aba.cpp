@@ -16,6 +16,7 @@
 
 #include "joint.h"
 #include "se3_sim/dynamics.h"
+#include "sincos.h"
 
 namespace se3 {
 namespace {
@@ -282,8 +283,12 @@ SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, doub
 
 const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v,
                 const VecX& tau, const Vec6* f_ext_base) {
-  detail::joint_transforms(model, data, q);
-  // Outward: velocities (33), gamma (34), J_j and beta_j (39).
+  // The joints' sines and cosines in one batch; each body's Xup (joint_transforms) is formed in
+  // the first outward loop, where its twist reads it at once.
+  double* sq = data.sin_q.data();
+  double* cq = data.cos_q.data();
+  detail::sincos_n(q.data(), model.nq, sq, cq);
+  // Outward: transforms, velocities (33), gamma (34), J_j and beta_j (39).
   if (model.floating) {
     data.V[0] = v.head<6>();
     set_inertia_upper(model.inertia[0], data.IA[0]);
@@ -299,7 +304,9 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
   const JointModel* joints = model.joints.data();
   const int* parent = model.parent.data();
   const Inertia* inertia = model.inertia.data();
-  const SE3* Xup = data.Xup.data();
+  const SE3* X_tree = model.X_tree.data();
+  SE3* Xup = data.Xup.data();
+  const double* qs = q.data();
   Vec6* Vs = data.V.data();
   Vec6* Fs = data.F.data();
   Vec6* cs = data.c.data();
@@ -320,6 +327,8 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
     double* pA = Fs[i].data();
     detail::with_joint(jm, [&](auto J) SE3_LAMBDA {
       constexpr int k = J.axis;
+      const int iq = jm.idx_q;
+      J.transform(X_tree[i], qs[iq], cq[iq], sq[iq], Xup[i]);
       if (parent[i] == 0 && fixed) {
         // On the fixed base: V = S qd, so gamma = V x S qd = 0 and pA = V x* (J V) =
         // qd^2 e_z x [I e_z; h x e_z] on both halves (revolute), 0 (prismatic).
