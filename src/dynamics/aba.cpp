@@ -15,6 +15,7 @@
 #include <type_traits>
 
 #include "joint.h"
+#include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 #include "sincos.h"
 
@@ -82,31 +83,41 @@ template <int F, int PM>
 SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
                                 const Vec6& pA, const Vec6& c, Mat6& IAp) {
   const double* m = IA.data();  // m[r + 6 c], r <= c
-  double Ud[6];
-#pragma GCC unroll 6
-  for (int r = 0; r < 6; ++r) Ud[r] = U[r] * Dinv;
-  const double a00 = m[0] - Ud[0] * U[0], a01 = m[6] - Ud[0] * U[1], a11 = m[7] - Ud[1] * U[1];
-  double B[2][3], C[3][3];
-#pragma GCC unroll 3
-  for (int j = 0; j < 3; ++j) {
-    B[0][j] = m[0 + 6 * (3 + j)] - Ud[0] * U[3 + j];
-    B[1][j] = m[1 + 6 * (3 + j)] - Ud[1] * U[3 + j];
-  }
-#pragma GCC unroll 3
-  for (int i = 0; i < 3; ++i) {
-#pragma GCC unroll 3
-    for (int j = i; j < 3; ++j) C[i][j] = C[j][i] = m[3 + i + 6 * (3 + j)] - Ud[3 + i] * U[3 + j];
-  }
+  // Ia's entries and pa, two at a time (detail::v2d): the pairs are consecutive rows of one
+  // column of IA's upper triangle, and each lane does the scalar sums in their order (the same
+  // numbers). Bt[j][r] = B(r, j); Cm is C with both triangles.
+  using detail::load2;
+  using detail::v2d;
+  const auto dup = [](double x) SE3_LAMBDA { return detail::pair(x, x); };
+  const v2d Dv = dup(Dinv);
+  const v2d Ud01 = load2(U.data()) * Dv, Ud23 = load2(U.data() + 2) * Dv,
+            Ud45 = load2(U.data() + 4) * Dv;
+  const double a00 = m[0] - Ud01[0] * U[0];
+  const v2d a01_11 = load2(m + 6) - Ud01 * dup(U[1]);  // (a01, a11)
+  const double a01 = a01_11[0], a11 = a01_11[1];
+  const v2d Ud34 = detail::pair(Ud23[1], Ud45[0]);
+  const v2d Bc0 = load2(m + 18) - Ud01 * dup(U[3]);  // (B(0, j), B(1, j))
+  const v2d Bc1 = load2(m + 24) - Ud01 * dup(U[4]);
+  const v2d Bc2 = load2(m + 30) - Ud01 * dup(U[5]);
+  const double C00 = m[21] - Ud34[0] * U[3], C22 = m[35] - Ud45[1] * U[5];
+  const v2d Cc1 = load2(m + 27) - Ud34 * dup(U[4]);  // (C(0, 1), C(1, 1))
+  const v2d Cc2 = load2(m + 33) - Ud34 * dup(U[5]);  // (C(0, 2), C(1, 2))
+  alignas(16) double Bt[3][2];
+  double Cm[3][3];
+  detail::store2(Bt[0], Bc0), detail::store2(Bt[1], Bc1), detail::store2(Bt[2], Bc2);
+  Cm[0][0] = C00, Cm[0][1] = Cm[1][0] = Cc1[0], Cm[1][1] = Cc1[1];
+  Cm[0][2] = Cm[2][0] = Cc2[0], Cm[1][2] = Cm[2][1] = Cc2[1], Cm[2][2] = C22;
   // (40)-(41): pa = pA + U u / D + Ia c, with c = (c0, c1, 0, c3, c4, 0).
+  const v2d uv = dup(u), c0 = dup(c[0]), c1 = dup(c[1]), c3 = dup(c[3]), c4 = dup(c[4]);
+  const v2d pa01 = load2(pA.data()) + Ud01 * uv + detail::pair(a00, a01) * c0 + a01_11 * c1 +
+                   Bc0 * c3 + Bc1 * c4;
+  const v2d pa34 = load2(pA.data() + 3) + Ud34 * uv + detail::pair(Bc0[0], Bc1[0]) * c0 +
+                   detail::pair(Bc0[1], Bc1[1]) * c1 + detail::pair(C00, Cc1[0]) * c3 + Cc1 * c4;
   Vec6 pa;
-  pa[0] = pA[0] + Ud[0] * u + a00 * c[0] + a01 * c[1] + B[0][0] * c[3] + B[0][1] * c[4];
-  pa[1] = pA[1] + Ud[1] * u + a01 * c[0] + a11 * c[1] + B[1][0] * c[3] + B[1][1] * c[4];
-  pa[2] = pA[2] + Ud[2] * u;
-#pragma GCC unroll 3
-  for (int j = 0; j < 3; ++j) {
-    pa[3 + j] = pA[3 + j] + Ud[3 + j] * u + B[0][j] * c[0] + B[1][j] * c[1] + C[j][0] * c[3] +
-                C[j][1] * c[4];
-  }
+  detail::store2(pa.data(), pa01);
+  detail::store2(pa.data() + 3, pa34);
+  pa[2] = pA[2] + Ud23[0] * u;
+  pa[5] = pA[5] + Ud45[1] * u + Bc2[0] * c[0] + Bc2[1] * c[1] + Cc2[0] * c[3] + Cc2[1] * c[4];
   // (38): the rotation.
   const double* R = f.R.data();  // column-major: R(r, k) = R[r + 3 k]
   double Ap[3][3], Bp[3][3], Cp[3][3], Z[3][3], y0[3], y1[3], uu[3], ww[3];
@@ -114,12 +125,14 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
     const double q00 = R[0], q10 = R[1], q01 = R[3], q11 = R[4];
 #pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {  // Z = R C: rows 0, 1 mixed by Q, row 2 kept
-      Z[0][j] = q00 * C[0][j] + q01 * C[1][j];
-      Z[1][j] = q10 * C[0][j] + q11 * C[1][j];
-      Z[2][j] = C[2][j];
+      Z[0][j] = q00 * Cm[0][j] + q01 * Cm[1][j];
+      Z[1][j] = q10 * Cm[0][j] + q11 * Cm[1][j];
+      Z[2][j] = Cm[2][j];
     }
-    y0[0] = q00 * B[0][0] + q01 * B[0][1], y0[1] = q10 * B[0][0] + q11 * B[0][1], y0[2] = B[0][2];
-    y1[0] = q00 * B[1][0] + q01 * B[1][1], y1[1] = q10 * B[1][0] + q11 * B[1][1], y1[2] = B[1][2];
+    y0[0] = q00 * Bt[0][0] + q01 * Bt[1][0], y0[1] = q10 * Bt[0][0] + q11 * Bt[1][0],
+    y0[2] = Bt[2][0];
+    y1[0] = q00 * Bt[0][1] + q01 * Bt[1][1], y1[1] = q10 * Bt[0][1] + q11 * Bt[1][1],
+    y1[2] = Bt[2][1];
     uu[0] = a00 * q00 + a01 * q01, uu[1] = a00 * q10 + a01 * q11;
     ww[0] = a01 * q00 + a11 * q01, ww[1] = a01 * q10 + a11 * q11;
 #pragma GCC unroll 3
@@ -149,9 +162,9 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
   auto rows = [&](auto rr) SE3_LAMBDA {  // Z = R C, y_k = R b_k, u, w: row r
     constexpr int r = decltype(rr)::value;
 #pragma GCC unroll 3
-    for (int j = 0; j < 3; ++j) Z[r][j] = dot3<F, true, r>(R, C[0][j], C[1][j], C[2][j]);
-    y0[r] = dot3<F, true, r>(R, B[0][0], B[0][1], B[0][2]);
-    y1[r] = dot3<F, true, r>(R, B[1][0], B[1][1], B[1][2]);
+    for (int j = 0; j < 3; ++j) Z[r][j] = dot3<F, true, r>(R, Cm[0][j], Cm[1][j], Cm[2][j]);
+    y0[r] = dot3<F, true, r>(R, Bt[0][0], Bt[1][0], Bt[2][0]);
+    y1[r] = dot3<F, true, r>(R, Bt[0][1], Bt[1][1], Bt[2][1]);
     if constexpr (axis_row_of(F, r)) {
       uu[r] = ww[r] = 0;
     } else {
