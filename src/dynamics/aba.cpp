@@ -154,6 +154,55 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
     add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
     return pa;
   }
+  if constexpr (F == detail::kGeneral) {
+    // The general rotation two entries at a time: R's entries broadcast (bR) against operands
+    // paired as they lie (C's and B's rows, (a00, a01) and (a01, a11)), or pairs of R's
+    // column against broadcasts; each lane does the scalar form's sums in its order, so the
+    // sparse forms below still give the same numbers.
+    using detail::pair;
+    using detail::store2;
+    v2d bR[9];
+#pragma GCC unroll 9
+    for (int k = 0; k < 9; ++k) bR[k] = dup(R[k]);
+    const v2d C0 = load2(Cm[0]), C1 = load2(Cm[1]), C2 = load2(Cm[2]);  // (C(k, 0), C(k, 1))
+    const v2d B0 = load2(Bt[0]), B1 = load2(Bt[1]), B2 = load2(Bt[2]);  // (B(0, k), B(1, k))
+    const v2d A0 = pair(a00, a01);
+    v2d ZR[3], Y[3], UW[3];  // (Z(r, 0), Z(r, 1)), (y0[r], y1[r]), (u[r], w[r])
+    double Z2[3];            // Z(r, 2)
+#pragma GCC unroll 3
+    for (int r = 0; r < 3; ++r) {
+      ZR[r] = bR[r] * C0 + bR[r + 3] * C1 + bR[r + 6] * C2;
+      Z2[r] = R[r] * Cm[0][2] + R[r + 3] * Cm[1][2] + R[r + 6] * Cm[2][2];
+      Y[r] = bR[r] * B0 + bR[r + 3] * B1 + bR[r + 6] * B2;
+      UW[r] = A0 * bR[r] + a01_11 * bR[r + 3];
+    }
+    // B'(i, j) = R(i, 0) y0[j] + R(i, 1) y1[j]: (B'(i, 0), B'(i, 1)) a pair.
+    const v2d Y0 = pair(Y[0][0], Y[1][0]), Y1 = pair(Y[0][1], Y[1][1]);
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+      store2(Bp[i], bR[i] * Y0 + bR[i + 3] * Y1);
+      Bp[i][2] = R[i] * Y[2][0] + R[i + 3] * Y[2][1];
+    }
+    // C'(i, j) = R(j, :) Z(i, :) and A'(i, j) = u[i] R(j, 0) + w[i] R(j, 1) for j >= i: rows 0
+    // and 1 of column j a pair.
+    const v2d ZC0 = pair(ZR[0][0], ZR[1][0]), ZC1 = pair(ZR[0][1], ZR[1][1]),
+              ZC2 = pair(Z2[0], Z2[1]);
+    const v2d U01 = pair(UW[0][0], UW[1][0]), W01 = pair(UW[0][1], UW[1][1]);
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j) {
+      const v2d cj = bR[j] * ZC0 + bR[j + 3] * ZC1 + bR[j + 6] * ZC2;
+      const v2d aj = U01 * bR[j] + W01 * bR[j + 3];
+      Cp[0][j] = cj[0], Ap[0][j] = aj[0];
+      if (j > 0) {
+        store2(Cp[j], cj);  // C'(j, 0), C'(j, 1): the symmetric entries
+        Cp[1][j] = cj[1], Ap[1][j] = aj[1];
+      }
+    }
+    Cp[2][2] = R[2] * ZR[2][0] + R[5] * ZR[2][1] + R[8] * Z2[2];
+    Ap[2][2] = UW[2][0] * R[2] + UW[2][1] * R[5];
+    add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
+    return pa;
+  }
   using detail::axis_row_of;
   using detail::dot3;
   using I0 = std::integral_constant<int, 0>;
