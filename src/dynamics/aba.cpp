@@ -68,7 +68,7 @@ SE3_KERNEL void add_shifted(const Vec3& pv, const double (&Ap)[3][3], const doub
 // The inward step of a revolute body i (eqs. 38, 40, 41), on the upper triangle of its
 // articulated inertia IA: Ia = IA - U U^T / D, whose row and column 2 vanish, and
 // pa = pA + Ia c + U u / D; then adds Ad*_{f^-1} Ia Ad_{f^-1} to the parent's IA (upper
-// triangle) and returns pa (child frame). f = (R, p) is the child in its parent.
+// triangle) and Ad*_{f^-1} pa to the parent's pA. f = (R, p) is the child in its parent.
 //
 // Ia = [A B; B^T C] has A = [a00 a01 0; a01 a11 0; 0 0 0] and B's row 2 zero. The rotation:
 // A' = R A R^T = u r0^T + w r1^T (r_k the columns of R, u = a00 r0 + a01 r1,
@@ -80,8 +80,8 @@ SE3_KERNEL void add_shifted(const Vec3& pv, const double (&Ap)[3][3], const doub
 // kAxisRow + k: r0 and r1 have a zero component k and r2 = +-e_k, so A' and B' have a zero row k
 // (A' a zero column k too), and the products skip R's zeros (detail::dot3).
 template <int F, int PM>
-SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
-                                const Vec6& pA, const Vec6& c, Mat6& IAp) {
+SE3_KERNEL void inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
+                                const Vec6& pA, const Vec6& c, Mat6& IAp, Vec6& pAp) {
   const double* m = IA.data();  // m[r + 6 c], r <= c
   // Ia's entries and pa, two at a time (detail::v2d): the pairs are consecutive rows of one
   // column of IA's upper triangle, and each lane does the scalar sums in their order (the same
@@ -152,7 +152,8 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
     Ap[1][1] = uu[1] * q10 + ww[1] * q11;
     Ap[0][2] = Ap[1][2] = Ap[2][2] = 0;
     add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
-    return pa;
+    detail::add_force<F, PM>(f, pa.data(), pAp.data());
+    return;
   }
   if constexpr (F == detail::kGeneral) {
     // The general rotation two entries at a time: R's entries broadcast (bR) against operands
@@ -201,7 +202,21 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
     Cp[2][2] = R[2] * ZR[2][0] + R[5] * ZR[2][1] + R[8] * Z2[2];
     Ap[2][2] = UW[2][0] * R[2] + UW[2][1] * R[5];
     add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
-    return pa;
+    // pAp += Ad*_{f^-1} pa (eq. 19, detail::force_to_parent): (R n, R f) row by row as a pair,
+    // then n += p x f.
+    const v2d X0 = pair(pa01[0], pa34[0]), X1 = pair(pa01[1], pa34[1]), X2 = pair(pa[2], pa[5]);
+    double n[3], fr[3];
+#pragma GCC unroll 3
+    for (int r = 0; r < 3; ++r) {
+      const v2d nf = bR[r] * X0 + bR[r + 3] * X1 + bR[r + 6] * X2;
+      n[r] = nf[0], fr[r] = nf[1];
+    }
+    const double* p = f.p.data();
+    pAp[0] += detail::plus_cross<PM, 0>(n[0], p, fr);
+    pAp[1] += detail::plus_cross<PM, 1>(n[1], p, fr);
+    pAp[2] += detail::plus_cross<PM, 2>(n[2], p, fr);
+    pAp[3] += fr[0], pAp[4] += fr[1], pAp[5] += fr[2];
+    return;
   }
   using detail::axis_row_of;
   using detail::dot3;
@@ -244,7 +259,7 @@ SE3_KERNEL Vec6 inward_revolute(const SE3& f, const Mat6& IA, const Vec6& U, dou
                          SE3_LAMBDA { entries(ii, I0()), entries(ii, I1()), entries(ii, I2()); };
   row_entries(I0()), row_entries(I1()), row_entries(I2());
   add_shifted<PM>(f.p, Ap, Bp, Cp, IAp);
-  return pa;
+  detail::add_force<F, PM>(f, pa.data(), pAp.data());
 }
 
 // The same step for a prismatic body (eq. 38 on the full symmetric Ia; its row and column 5
@@ -322,10 +337,10 @@ template <class J>
 SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, double Dinv, double u,
                             const Vec6& pA, const Vec6& c, Mat6& IAp, Vec6& pAp) {
   constexpr int k = J::axis;
-  Vec6 pa;
   if constexpr (k == 2) {
-    pa = inward_revolute<J::form, J::offset>(f, IA, U, Dinv, u, pA, c, IAp);
+    inward_revolute<J::form, J::offset>(f, IA, U, Dinv, u, pA, c, IAp, pAp);
   } else {
+    Vec6 pa;
     double ia[6][6];
     const Vec6 Ud = U * Dinv;
     for (int cc = 0; cc < 6; ++cc) {
@@ -337,8 +352,8 @@ SE3_KERNEL void inward_step(J, const SE3& f, const Mat6& IA, const Vec6& U, doub
       pa[r] += ia[r][0] * c[0] + ia[r][1] * c[1] + ia[r][3] * c[3] + ia[r][4] * c[4];
     }
     add_transformed_inertia(f, ia, IAp);
+    detail::add_force<J::form, J::offset>(f, pa.data(), pAp.data());
   }
-  detail::add_force<J::form, J::offset>(f, pa.data(), pAp.data());
 }
 
 }  // namespace
@@ -450,12 +465,15 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
         Ua = U[3] * a[3] + U[4] * a[4] + U[5] * a[5];
       } else {
         detail::inv_motion<J.form, J.offset>(Xup[i], As[parent[i]].data(), a);
+        // a += c and U.a, two entries at a time.
         const double* c = cs[i].data();
-        Ua = 0;
-        for (int r = 0; r < 6; ++r) {
-          a[r] += c[r];
-          Ua += U[r] * a[r];
-        }
+        const detail::v2d a01 = detail::load2(a) + detail::load2(c);
+        const detail::v2d a23 = detail::load2(a + 2) + detail::load2(c + 2);
+        const detail::v2d a45 = detail::load2(a + 4) + detail::load2(c + 4);
+        detail::store2(a, a01), detail::store2(a + 2, a23), detail::store2(a + 4, a45);
+        const detail::v2d Us =
+            detail::load2(U) * a01 + detail::load2(U + 2) * a23 + detail::load2(U + 4) * a45;
+        Ua = Us[0] + Us[1];
       }
       const double qdd = (us[iv] - Ua) * Dinvs[iv];
       a[J.axis] += qdd;
