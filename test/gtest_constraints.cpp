@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <new>
 #include <random>
 #include <string>
@@ -107,7 +108,9 @@ struct RunStats {
   bool ok = true;
 };
 
-RunStats run(Simulator& sim, double duration) {
+/// Steps sim for duration seconds; each (if given) sees the simulator after every step.
+RunStats run(Simulator& sim, double duration,
+             const std::function<void(const Simulator&)>& each = nullptr) {
   RunStats s;
   const double T0 = sim.kinetic_energy();
   const double E0 = T0 + sim.potential_energy();
@@ -120,6 +123,7 @@ RunStats run(Simulator& sim, double duration) {
       break;
     }
     s.err_max = std::max(s.err_max, sim.constraint_error());
+    if (each) each(sim);
     if (k % 50 == 0) {
       const double E = sim.kinetic_energy() + sim.potential_energy();
       s.energy_drift = std::max(s.energy_drift, std::abs(E - E0) / T0);
@@ -173,14 +177,18 @@ TEST(Constraints, PinnedChainPinAndAxisHold) {
   const Scene sc = load_scene(path("config/scenes/pinned_chain.yaml"));
   auto sim = make_simulator(sc);
   const Vec3 pin0 = sim->state().base.p;
-  const RunStats s = run(*sim, 20.0);
+  double turned = 0;  // the largest turn of the base's x axis away from its start
+  const RunStats s = run(*sim, 20.0, [&](const Simulator& m) {
+    turned = std::max(turned, (m.state().base.R.col(0) - Vec3::UnitX()).norm());
+  });
   EXPECT_TRUE(s.ok);
   EXPECT_LT(s.err_max, 1e-9);
   EXPECT_LT((sim->state().base.p - pin0).norm(), 1e-9);
   EXPECT_LT((sim->state().base.R.col(2) - Vec3::UnitZ()).norm(), 1e-9);
   EXPECT_LT(s.energy_drift, 1e-4);
-  // The chain moved: the hinge turned and the links swung.
-  EXPECT_GT((sim->state().base.R.col(0) - Vec3::UnitX()).norm(), 1e-2);
+  // The chain moved: the hinge turned (during the run: where it ends after 20 s, chaotic
+  // swinging decides, and 2 pi multiples look like no turn at all).
+  EXPECT_GT(turned, 1.0);
   std::printf("pinned chain 20 s: error max %.3g, energy drift %.3g\n", s.err_max, s.energy_drift);
 }
 
