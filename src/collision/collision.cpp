@@ -49,6 +49,7 @@ struct CollisionModel::Impl {
   std::vector<SE3> world;              ///< shape frames in the world, from the last collide()
   std::vector<unsigned char> allowed;  ///< n x n: may_collide
   int max_frame = -1;
+  bool tree_pairs = false;  ///< two objects of the broad phase may collide (else it is skipped)
   fcl::DynamicAABBTreeCollisionManagerd manager;
   fcl::CollisionRequestd request;
   fcl::CollisionResultd result;
@@ -69,6 +70,15 @@ struct CollisionModel::Impl {
   std::vector<double> gaps;
   std::vector<int> picked, cand;
   std::vector<double> dist, tu, tv;
+  // Per half-space (in the order of halfspaces), the objects that may touch it grouped by frame,
+  // in order of their first object (CollisionOptions::ground_contacts_per_body; else one group per
+  // object).
+  std::vector<std::vector<std::vector<int>>> ground_groups;
+  // A body's candidates against a half-space (groups of more than one object): gap, coordinates
+  // across the normal, owner object and its point (a hull vertex, or an entry of gpts).
+  std::vector<double> ggap, gu, gv;
+  std::vector<int> gobj, gidx;
+  std::vector<Vec3> gpts;
 
   bool ok(int i, int j) const { return allowed[std::size_t(i) * n + j] != 0; }
 };
@@ -158,28 +168,60 @@ double nearest_picked(const double* u, const double* v, double lu, double lv, do
   return far;
 }
 
-// Up to max of the candidates below the margin: the deepest first, then each next the one
-// farthest (across the normal) from those already picked, so that a resting face keeps its
-// corners (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first;
-// cand, dist, tu and tv are workspaces of at least pts.size() entries.
+// The gaps of a hull's vertices to a plane, g[i] = ((n_x X[i] + n_y Y[i]) + n_z Z[i]) + d0 for
+// i < np (X, Y, Z: the vertices' three coordinate arrays, one after the other), and in the same
+// pass the candidates: cs gets the indices of the gaps below the margin, in order (room for
+// np + 1 entries); returns their count, and the smallest gap in lowest. Two vertices at a time
+// where SSE2 is there, with the scalar loop's operations in each lane (the same bits).
+int hull_gaps(const double* X, int np, const Vec3& n, double d0, double margin, double* g, int* cs,
+              double& lowest) {
+  const double *Y = X + np, *Z = Y + np;
+  const double nx = n.x(), ny = n.y(), nz = n.z();
+  int k = 0, i = 0;
+  double low = INFINITY;
+#ifdef __SSE2__
+  const __m128d vx = _mm_set1_pd(nx), vy = _mm_set1_pd(ny), vz = _mm_set1_pd(nz);
+  const __m128d vd = _mm_set1_pd(d0), vm = _mm_set1_pd(margin);
+  __m128d lows = _mm_set1_pd(INFINITY);
+  for (; i + 2 <= np; i += 2) {
+    const __m128d gi = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(X + i)),
+                                                        _mm_mul_pd(vy, _mm_loadu_pd(Y + i))),
+                                             _mm_mul_pd(vz, _mm_loadu_pd(Z + i))),
+                                  vd);
+    _mm_storeu_pd(g + i, gi);
+    lows = _mm_min_pd(gi, lows);  // a NaN gap is skipped (and never a candidate)
+    // Both, the second or neither below the margin: without a branch (an entry past the
+    // count is overwritten by the next).
+    const int below = _mm_movemask_pd(_mm_cmplt_pd(gi, vm));
+    cs[k] = i + 1 - (below & 1);
+    cs[k + 1] = i + 1;
+    k += (below & 1) + (below >> 1);
+  }
+  double two[2];
+  _mm_storeu_pd(two, lows);
+  low = two[0] < two[1] ? two[0] : two[1];
+#endif
+  for (; i < np; ++i) {
+    g[i] = ((nx * X[i] + ny * Y[i]) + nz * Z[i]) + d0;
+    cs[k] = i;
+    k += g[i] < margin;
+    if (g[i] < low) low = g[i];
+  }
+  lowest = low;
+  return k;
+}
+
+// Up to max of the nc candidates cand (indices into pts and gaps, below the margin, in order;
+// deepest is the first of the deepest): the deepest first, then each next the one farthest
+// (across the normal) from those already picked, so that a resting face keeps its corners
+// (farthest-point sampling: O(max * candidates)). picked gets indices, deepest first; dist, tu
+// and tv are workspaces of at least nc entries.
 void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, const Vec3& n,
-                 double margin, int max, std::vector<int>& picked, std::vector<int>& cand,
+                 int nc, int deepest, int max, std::vector<int>& picked, std::vector<int>& cand,
                  std::vector<double>& dist, std::vector<double>& tu, std::vector<double>& tv) {
   picked.clear();
-  // The candidates without a branch per point, then the deepest among them (the first of
-  // equal ones).
-  const int np = int(pts.size());
-  int nc = 0;
-  int* cs = cand.data();
-  for (int i = 0; i < np; ++i) {
-    cs[nc] = i;
-    nc += gaps[i] < margin;
-  }
   if (nc == 0) return;
-  int deepest = cs[0];
-  for (int k = 1; k < nc; ++k) {
-    if (gaps[cs[k]] < gaps[deepest]) deepest = cs[k];
-  }
+  const int* cs = cand.data();
   picked.push_back(deepest);
   if (max > 1 && nc > 1) {
     // Distances across the normal from the candidates' coordinates in the plane (t1, t2).
@@ -230,22 +272,37 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
   const Vec3 nl = T.R.transpose() * n;
   const double d0 = n.dot(T.p) - offset;
   const std::vector<Vec3>* pts = &m.points;
+  // The candidates below the margin, and the deepest of them (the first of equal ones).
+  int nc = 0, deepest = 0;
+  int* cs = m.cand.data();
+  const double* g = m.gaps.data();
   if (o.shape.type == ShapeType::Mesh) {
     // No vertex is nearer the plane than the nearest corner of the hull's box.
     const std::array<Vec3, 2>& box = m.box[b];
     if (nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) return;
     pts = &m.hulls[b]->vertices;
-    const int nv = int(pts->size());
-    const double* X = m.hull_soa[b].data();
-    const double *Y = X + nv, *Z = Y + nv;
-    const double nx = nl.x(), ny = nl.y(), nz = nl.z();
-    double* g = m.gaps.data();
-    for (int i = 0; i < nv; ++i) g[i] = ((nx * X[i] + ny * Y[i]) + nz * Z[i]) + d0;
+    double lowest = 0;
+    nc = hull_gaps(m.hull_soa[b].data(), int(pts->size()), nl, d0, m.margin, m.gaps.data(), cs,
+                   lowest);
+    if (nc == 0) return;
+    int k = 0;
+    while (!(g[cs[k]] == lowest)) ++k;
+    deepest = cs[k];
   } else {
     halfspace_candidates(o, SE3(), nl, m.points);
-    for (std::size_t i = 0; i < m.points.size(); ++i) m.gaps[i] = nl.dot(m.points[i]) + d0;
+    const int np = int(m.points.size());
+    for (int i = 0; i < np; ++i) m.gaps[i] = nl.dot(m.points[i]) + d0;
+    for (int i = 0; i < np; ++i) {
+      cs[nc] = i;
+      nc += g[i] < m.margin;
+    }
+    if (nc == 0) return;
+    deepest = cs[0];
+    for (int k = 1; k < nc; ++k) {
+      if (g[cs[k]] < g[deepest]) deepest = cs[k];
+    }
   }
-  pick_points(*pts, m.gaps, nl, m.margin, m.max_contacts, m.picked, m.cand, m.dist, m.tu, m.tv);
+  pick_points(*pts, m.gaps, nl, nc, deepest, m.max_contacts, m.picked, m.cand, m.dist, m.tu, m.tv);
   for (int i : m.picked) {
     Contact c;
     c.a = h;
@@ -254,6 +311,112 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
     c.depth = -m.gaps[i];
     // Midway between the shape's point and the plane.
     c.point = T.p + T.R * (*pts)[i] + c.depth / 2 * n;
+    m.data->contacts.push_back(c);
+  }
+}
+
+// Contacts of one body's objects (`group`, all on one frame, at least two) against half-space h,
+// picked together: every object's candidates as collide_halfspace takes them, then of their union
+// the deepest (the first of equal ones), each next the farthest across the normal from those
+// picked, at most max_contacts for the body, deepest first. A body of overlapping shapes (Solo-12's
+// lower leg, whose hull holds its foot's) then spends its budget on points spread over its whole
+// footprint instead of one set per shape. Each contact names the object its point belongs to.
+void collide_halfspace_body(CollisionModel& model, int h, const std::vector<int>& group) {
+  CollisionModel::Impl& m = model.impl();
+  const SE3& P = m.world[h];
+  const Vec3 n = P.R.col(2);
+  const double offset = n.dot(P.p);
+  // The candidates' coordinates across the normal, in one world basis for every object.
+  int axis = 0;  // the world axis least along n
+  n.cwiseAbs().minCoeff(&axis);
+  const Vec3 t1 = n.cross(Vec3::Unit(axis)).normalized(), t2 = n.cross(t1);
+  int nc = 0;
+  double low = INFINITY;  // the deepest gap
+  m.gpts.clear();
+  for (int b : group) {
+    const CollisionObject& o = model.objects()[b];
+    const SE3& T = m.world[b];
+    {  // Early out on the object's box (FCL's AABB, inflated).
+      const fcl::AABBd& box = m.fcl[b]->getAABB();
+      const Vec3 c = (box.min_ + box.max_) / 2, r = (box.max_ - box.min_) / 2;
+      if (n.dot(c) - offset - r.cwiseProduct(n.cwiseAbs()).sum() > m.margin) continue;
+    }
+    ++m.data->pairs_tested;
+    const Vec3 nl = T.R.transpose() * n;
+    const double d0 = n.dot(T.p) - offset;
+    const Vec3* pts = nullptr;
+    int first = 0, k1 = 0;  // this object's candidates: k1 of them, in cs
+    double* g = m.gaps.data();
+    int* cs = m.cand.data();
+    if (o.shape.type == ShapeType::Mesh) {
+      const std::array<Vec3, 2>& box = m.box[b];
+      if (nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) continue;
+      pts = m.hulls[b]->vertices.data();
+      double lowest = 0;
+      k1 = hull_gaps(m.hull_soa[b].data(), int(m.hulls[b]->vertices.size()), nl, d0, m.margin, g,
+                     cs, lowest);
+      if (lowest < low) low = lowest;
+    } else {
+      halfspace_candidates(o, SE3(), nl, m.points);
+      first = int(m.gpts.size());
+      m.gpts.insert(m.gpts.end(), m.points.begin(), m.points.end());  // reserved: 8 per object
+      pts = m.gpts.data() + first;
+      const int np = int(m.points.size());
+      for (int i = 0; i < np; ++i) g[i] = nl.dot(pts[i]) + d0;
+      for (int i = 0; i < np; ++i) {
+        cs[k1] = i;
+        k1 += g[i] < m.margin;
+        if (g[i] < low) low = g[i];
+      }
+    }
+    const Vec3 l1 = T.R.transpose() * t1, l2 = T.R.transpose() * t2;
+    const double u0 = t1.dot(T.p), v0 = t2.dot(T.p);
+    for (int k = 0; k < k1; ++k) {
+      const int i = cs[k];
+      m.ggap[nc] = g[i];
+      m.gu[nc] = l1.dot(pts[i]) + u0;
+      m.gv[nc] = l2.dot(pts[i]) + v0;
+      m.gobj[nc] = b;
+      m.gidx[nc] = first + i;
+      ++nc;
+    }
+  }
+  if (nc == 0) return;
+  const double* gap = m.ggap.data();
+  int deepest = 0;  // the first of the deepest
+  while (!(gap[deepest] == low)) ++deepest;
+  m.picked.clear();
+  m.picked.push_back(deepest);
+  if (m.max_contacts > 1 && nc > 1) {
+    const double* cu = m.gu.data();
+    const double* cv = m.gv.data();
+    double* d = m.dist.data();
+    std::fill(d, d + nc, INFINITY);
+    double lu = cu[deepest], lv = cv[deepest];
+    while (int(m.picked.size()) < m.max_contacts) {
+      // The first of the farthest, if farther than 1e-12 (as pick_points).
+      const double far = nearest_picked(cu, cv, lu, lv, d, nc);
+      if (!(far > 1e-12)) break;
+      int best = 0;
+      while (!(d[best] == far)) ++best;
+      m.picked.push_back(best);
+      lu = cu[best];
+      lv = cv[best];
+    }
+  }
+  std::sort(m.picked.begin(), m.picked.end(), [&](int x, int y) { return gap[x] < gap[y]; });
+  for (int k : m.picked) {
+    const int b = m.gobj[k];
+    const SE3& T = m.world[b];
+    const Vec3& v = model.objects()[b].shape.type == ShapeType::Mesh
+                        ? m.hulls[b]->vertices[std::size_t(m.gidx[k])]
+                        : m.gpts[std::size_t(m.gidx[k])];
+    Contact c;
+    c.a = h;
+    c.b = b;
+    c.normal = n;
+    c.depth = -gap[k];
+    c.point = T.p + T.R * v + c.depth / 2 * n;  // midway between the shape's point and the plane
     m.data->contacts.push_back(c);
   }
 }
@@ -554,6 +717,11 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
       m.allowed[std::size_t(i) * n + j] = ok;
     }
   }
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (m.fcl[i] && m.fcl[j] && m.ok(i, j)) m.tree_pairs = true;
+    }
+  }
   // Static objects are placed once; the broad phase holds every non-half-space object.
   std::vector<fcl::CollisionObjectd*> all;
   for (int i = 0; i < n; ++i) {
@@ -578,8 +746,40 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
     if (h) most = std::max(most, h->vertices.size());
   }
   m.points.reserve(most);
-  m.gaps.assign(most, 0.0);  // sized once: at least as many as any object's candidates
-  m.cand.assign(most, 0);    // sized once: pick_points writes into them by index
+  m.gaps.assign(most, 0.0);    // sized once: at least as many as any object's candidates
+  m.cand.assign(most + 1, 0);  // sized once: hull_gaps writes into it by index, one past
+  // The objects each half-space may touch, grouped by frame (in order of their first object),
+  // with room for the candidates of the largest group.
+  std::size_t group_most = 0, group_objects = 0;
+  m.ground_groups.assign(m.halfspaces.size(), {});
+  for (std::size_t k = 0; k < m.halfspaces.size(); ++k) {
+    std::vector<std::vector<int>>& groups = m.ground_groups[k];
+    for (int b = 0; b < n; ++b) {
+      if (!m.fcl[b] || !m.ok(m.halfspaces[k], b)) continue;
+      std::vector<int>* into = nullptr;
+      if (options_.ground_contacts_per_body && objects_[b].frame != CollisionObject::kWorld) {
+        for (std::vector<int>& g : groups) {
+          if (objects_[g[0]].frame == objects_[b].frame) into = &g;
+        }
+      }
+      if (!into) into = &groups.emplace_back();
+      into->push_back(b);
+    }
+    for (const std::vector<int>& g : groups) {
+      if (g.size() < 2) continue;
+      std::size_t points = 0;
+      for (int b : g) points += m.hulls[b] ? m.hulls[b]->vertices.size() : 8;
+      group_most = std::max(group_most, points);
+      group_objects = std::max(group_objects, g.size());
+    }
+  }
+  m.ggap.assign(group_most, 0.0);
+  m.gu.assign(group_most, 0.0);
+  m.gv.assign(group_most, 0.0);
+  m.gobj.assign(group_most, 0);
+  m.gidx.assign(group_most, 0);
+  m.gpts.reserve(8 * group_objects);
+  most = std::max(most, group_most);
   m.dist.assign(most, 0.0);
   m.tu.assign(most, 0.0);
   m.tv.assign(most, 0.0);
@@ -617,11 +817,20 @@ void collide(CollisionModel& model, CollisionData& data, const std::vector<SE3>&
     m.fcl[i]->computeAABB();
     m.fcl[i]->inflate(m.margin / 2);
   }
-  m.manager.update();
-  m.manager.collide(&model, broadphase_callback);
-  for (int h : m.halfspaces) {
-    for (int b = 0; b < m.n; ++b) {
-      if (m.fcl[b] && m.ok(h, b)) collide_halfspace(model, h, b);
+  // The broad phase, unless no two of its objects may collide (a robot on the ground without
+  // self-collision: its pairs are all against the half-space, tested below).
+  if (m.tree_pairs) {
+    m.manager.update();
+    m.manager.collide(&model, broadphase_callback);
+  }
+  for (std::size_t k = 0; k < m.halfspaces.size(); ++k) {
+    const int h = m.halfspaces[k];
+    for (const std::vector<int>& group : m.ground_groups[k]) {
+      if (group.size() == 1) {
+        collide_halfspace(model, h, group[0]);
+      } else {
+        collide_halfspace_body(model, h, group);
+      }
     }
   }
   m.data = nullptr;
