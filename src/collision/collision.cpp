@@ -183,6 +183,33 @@ int hull_gaps(const double* X, int np, const Vec3& n, double d0, double margin, 
   const __m128d vx = _mm_set1_pd(nx), vy = _mm_set1_pd(ny), vz = _mm_set1_pd(nz);
   const __m128d vd = _mm_set1_pd(d0), vm = _mm_set1_pd(margin);
   __m128d lows = _mm_set1_pd(INFINITY);
+  // Four vertices a step, and their candidates appended only when there are some: a hull's
+  // vertices near the plane come in runs (qhull's order is mostly spatial: of Solo-12's foot's
+  // 168 blocks of four standing on the ground, 79 hold a candidate; of its lower leg's 72, 18).
+  for (; i + 4 <= np; i += 4) {
+    const __m128d g0 = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(X + i)),
+                                                        _mm_mul_pd(vy, _mm_loadu_pd(Y + i))),
+                                             _mm_mul_pd(vz, _mm_loadu_pd(Z + i))),
+                                  vd);
+    const __m128d g1 = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(X + i + 2)),
+                                                        _mm_mul_pd(vy, _mm_loadu_pd(Y + i + 2))),
+                                             _mm_mul_pd(vz, _mm_loadu_pd(Z + i + 2))),
+                                  vd);
+    _mm_storeu_pd(g + i, g0);
+    _mm_storeu_pd(g + i + 2, g1);
+    lows = _mm_min_pd(g0, lows);
+    lows = _mm_min_pd(g1, lows);
+    const int b0 = _mm_movemask_pd(_mm_cmplt_pd(g0, vm));
+    const int b1 = _mm_movemask_pd(_mm_cmplt_pd(g1, vm));
+    if (b0 | b1) {  // as below, twice
+      cs[k] = i + 1 - (b0 & 1);
+      cs[k + 1] = i + 1;
+      k += (b0 & 1) + (b0 >> 1);
+      cs[k] = i + 3 - (b1 & 1);
+      cs[k + 1] = i + 3;
+      k += (b1 & 1) + (b1 >> 1);
+    }
+  }
   for (; i + 2 <= np; i += 2) {
     const __m128d gi = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(X + i)),
                                                         _mm_mul_pd(vy, _mm_loadu_pd(Y + i))),
@@ -260,8 +287,9 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
   const double offset = n.dot(P.p);
   const CollisionObject& o = model.objects()[b];
   const SE3& T = m.world[b];
-  // Early out on the shape's bounding sphere (FCL's AABB of the object, inflated).
-  if (m.fcl[b]) {
+  // Early out on the shape's bounding sphere (FCL's AABB of the object, inflated; kept up to
+  // date only with a broad phase, else the box test below).
+  if (m.tree_pairs && m.fcl[b]) {
     const fcl::AABBd& box = m.fcl[b]->getAABB();
     const Vec3 c = (box.min_ + box.max_) / 2, r = (box.max_ - box.min_) / 2;
     if (n.dot(c) - offset - r.cwiseProduct(n.cwiseAbs()).sum() > m.margin) return;
@@ -289,6 +317,8 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
     while (!(g[cs[k]] == lowest)) ++k;
     deepest = cs[k];
   } else {
+    const std::array<Vec3, 2>& box = m.box[b];
+    if (!m.tree_pairs && nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) return;
     halfspace_candidates(o, SE3(), nl, m.points);
     const int np = int(m.points.size());
     for (int i = 0; i < np; ++i) m.gaps[i] = nl.dot(m.points[i]) + d0;
@@ -336,7 +366,7 @@ void collide_halfspace_body(CollisionModel& model, int h, const std::vector<int>
   for (int b : group) {
     const CollisionObject& o = model.objects()[b];
     const SE3& T = m.world[b];
-    {  // Early out on the object's box (FCL's AABB, inflated).
+    if (m.tree_pairs) {  // Early out on the object's box (FCL's AABB, inflated).
       const fcl::AABBd& box = m.fcl[b]->getAABB();
       const Vec3 c = (box.min_ + box.max_) / 2, r = (box.max_ - box.min_) / 2;
       if (n.dot(c) - offset - r.cwiseProduct(n.cwiseAbs()).sum() > m.margin) continue;
@@ -357,6 +387,8 @@ void collide_halfspace_body(CollisionModel& model, int h, const std::vector<int>
                      cs, lowest);
       if (lowest < low) low = lowest;
     } else {
+      const std::array<Vec3, 2>& box = m.box[b];
+      if (!m.tree_pairs && nl.dot(box[0]) + d0 - box[1].dot(nl.cwiseAbs()) >= m.margin) continue;
       halfspace_candidates(o, SE3(), nl, m.points);
       first = int(m.gpts.size());
       m.gpts.insert(m.gpts.end(), m.points.begin(), m.points.end());  // reserved: 8 per object
@@ -812,7 +844,8 @@ void collide(CollisionModel& model, CollisionData& data, const std::vector<SE3>&
   const std::vector<CollisionObject>& objs = model.objects();
   for (int i : m.moving) {
     m.world[i] = frame_poses[objs[i].frame] * objs[i].placement;
-    if (!m.fcl[i]) continue;
+    // FCL's transforms and AABBs: for the broad phase, and the half-space tests' first early out.
+    if (!m.fcl[i] || !m.tree_pairs) continue;
     m.fcl[i]->setTransform(to_fcl(m.world[i]));
     m.fcl[i]->computeAABB();
     m.fcl[i]->inflate(m.margin / 2);
