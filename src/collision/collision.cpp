@@ -7,8 +7,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #ifdef __SSE2__
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define SE3_COLLISION_AVX 1  // four-lane versions of the two hot loops, chosen at run time
 #endif
 #include <map>
 #include <set>
@@ -138,12 +143,49 @@ void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
 // the nearest picked point after picking (lu, lv); returns the largest d[k] (-inf for n = 0).
 // Two candidates at a time where SSE2 is there, with the same operations in each lane as the
 // scalar loop (no fused multiply-add), so both give the same bits.
+#ifdef SE3_COLLISION_AVX
+// Whether the CPU has AVX (the four-lane loops below; separate multiplies and adds, no fused
+// multiply-add, so every lane computes what the scalar and SSE2 loops compute, to the bit).
+// SE3_SIM_NO_AVX set in the environment keeps the SSE2 loops (to test them on an AVX machine).
+bool have_avx() {
+  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("SE3_SIM_NO_AVX");
+  return avx;
+}
+
+// nearest_picked's loop four candidates at a time (k from 0, while k + 4 <= n); returns the
+// largest d[k] of those, and the count done in done.
+__attribute__((target("avx"))) double nearest_picked_avx(const double* u, const double* v,
+                                                         double lu, double lv, double* d, int n,
+                                                         int& done) {
+  const __m256d pu = _mm256_set1_pd(lu), pv = _mm256_set1_pd(lv);
+  __m256d fars = _mm256_set1_pd(-INFINITY);
+  int k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const __m256d du = _mm256_sub_pd(_mm256_loadu_pd(u + k), pu);
+    const __m256d dv = _mm256_sub_pd(_mm256_loadu_pd(v + k), pv);
+    const __m256d dk = _mm256_add_pd(_mm256_mul_pd(du, du), _mm256_mul_pd(dv, dv));
+    const __m256d m = _mm256_min_pd(dk, _mm256_loadu_pd(d + k));
+    _mm256_storeu_pd(d + k, m);
+    fars = _mm256_max_pd(m, fars);
+  }
+  double lanes[4];
+  _mm256_storeu_pd(lanes, fars);
+  done = k;
+  const double a = lanes[0] > lanes[1] ? lanes[0] : lanes[1];
+  const double b = lanes[2] > lanes[3] ? lanes[2] : lanes[3];
+  return a > b ? a : b;
+}
+#endif
+
 double nearest_picked(const double* u, const double* v, double lu, double lv, double* d, int n) {
   double far = -INFINITY;
   int k = 0;
+#ifdef SE3_COLLISION_AVX
+  if (n >= 16 && have_avx()) far = nearest_picked_avx(u, v, lu, lv, d, n, k);
+#endif
 #ifdef __SSE2__
   // (A few candidates, a box's corners: the scalar loop below costs less than the set-up.)
-  if (n >= 16) {
+  if (n >= 16 && k == 0) {
     const __m128d pu = _mm_set1_pd(lu), pv = _mm_set1_pd(lv);
     __m128d fars = _mm_set1_pd(-INFINITY);
     for (; k + 2 <= n; k += 2) {
@@ -168,17 +210,91 @@ double nearest_picked(const double* u, const double* v, double lu, double lv, do
   return far;
 }
 
+#ifdef SE3_COLLISION_AVX
+// first_equal four entries at a time: the first k < n (from 0, four at a time) with d[k] == x,
+// or the count done (a multiple of four) when none is.
+__attribute__((target("avx"))) int first_equal_avx(const double* d, int n, double x) {
+  const __m256d vx = _mm256_set1_pd(x);
+  int k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const int eq = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(d + k), vx, _CMP_EQ_OQ));
+    if (eq) return k + __builtin_ctz(unsigned(eq));
+  }
+  return k;
+}
+#endif
+
+// The first k < n with d[k] == x (x one of them: the farthest candidate's distance).
+int first_equal(const double* d, int n, double x) {
+  int k = 0;
+#ifdef SE3_COLLISION_AVX
+  if (n >= 16 && have_avx()) k = first_equal_avx(d, n, x);
+#endif
+  while (!(d[k] == x)) ++k;
+  return k;
+}
+
 // The gaps of a hull's vertices to a plane, g[i] = ((n_x X[i] + n_y Y[i]) + n_z Z[i]) + d0 for
 // i < np (X, Y, Z: the vertices' three coordinate arrays, one after the other), and in the same
 // pass the candidates: cs gets the indices of the gaps below the margin, in order (room for
 // np + 1 entries); returns their count, and the smallest gap in lowest. Two vertices at a time
 // where SSE2 is there, with the scalar loop's operations in each lane (the same bits).
+#ifdef SE3_COLLISION_AVX
+// hull_gaps' loop eight vertices a step (i from 0, while i + 8 <= np): the gaps, the candidates
+// (their count in k), the smallest gap in low; returns the vertices done.
+__attribute__((target("avx"))) int hull_gaps_avx(const double* X, const double* Y, const double* Z,
+                                                 int np, const Vec3& n, double d0, double margin,
+                                                 double* g, int* cs, int& k, double& low) {
+  const __m256d vx = _mm256_set1_pd(n.x()), vy = _mm256_set1_pd(n.y()), vz = _mm256_set1_pd(n.z());
+  const __m256d vd = _mm256_set1_pd(d0), vm = _mm256_set1_pd(margin);
+  __m256d lows = _mm256_set1_pd(INFINITY);
+  int i = 0;
+  // Two of a pair's lanes below the margin, the second or neither: as in hull_gaps.
+  auto append = [&](int below, int j) {
+    cs[k] = j + 1 - (below & 1);
+    cs[k + 1] = j + 1;
+    k += (below & 1) + (below >> 1);
+  };
+  for (; i + 8 <= np; i += 8) {
+    const __m256d g0 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, _mm256_loadu_pd(X + i)),
+                                                  _mm256_mul_pd(vy, _mm256_loadu_pd(Y + i))),
+                                    _mm256_mul_pd(vz, _mm256_loadu_pd(Z + i))),
+                      vd);
+    const __m256d g1 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, _mm256_loadu_pd(X + i + 4)),
+                                                  _mm256_mul_pd(vy, _mm256_loadu_pd(Y + i + 4))),
+                                    _mm256_mul_pd(vz, _mm256_loadu_pd(Z + i + 4))),
+                      vd);
+    _mm256_storeu_pd(g + i, g0);
+    _mm256_storeu_pd(g + i + 4, g1);
+    lows = _mm256_min_pd(g0, lows);
+    lows = _mm256_min_pd(g1, lows);
+    const int b0 = _mm256_movemask_pd(_mm256_cmp_pd(g0, vm, _CMP_LT_OQ));
+    const int b1 = _mm256_movemask_pd(_mm256_cmp_pd(g1, vm, _CMP_LT_OQ));
+    if (b0 | b1) {
+      append(b0 & 3, i);
+      append(b0 >> 2, i + 2);
+      append(b1 & 3, i + 4);
+      append(b1 >> 2, i + 6);
+    }
+  }
+  double lanes[4];
+  _mm256_storeu_pd(lanes, lows);
+  for (double l : lanes) low = l < low ? l : low;
+  return i;
+}
+#endif
+
 int hull_gaps(const double* X, int np, const Vec3& n, double d0, double margin, double* g, int* cs,
               double& lowest) {
   const double *Y = X + np, *Z = Y + np;
   const double nx = n.x(), ny = n.y(), nz = n.z();
   int k = 0, i = 0;
   double low = INFINITY;
+#ifdef SE3_COLLISION_AVX
+  if (have_avx()) i = hull_gaps_avx(X, Y, Z, np, n, d0, margin, g, cs, k, low);
+#endif
 #ifdef __SSE2__
   const __m128d vx = _mm_set1_pd(nx), vy = _mm_set1_pd(ny), vz = _mm_set1_pd(nz);
   const __m128d vd = _mm_set1_pd(d0), vm = _mm_set1_pd(margin);
@@ -226,7 +342,7 @@ int hull_gaps(const double* X, int np, const Vec3& n, double d0, double margin, 
   }
   double two[2];
   _mm_storeu_pd(two, lows);
-  low = two[0] < two[1] ? two[0] : two[1];
+  for (double l : two) low = l < low ? l : low;
 #endif
   for (; i < np; ++i) {
     g[i] = ((nx * X[i] + ny * Y[i]) + nz * Z[i]) + d0;
@@ -269,8 +385,7 @@ void pick_points(const std::vector<Vec3>& pts, const std::vector<double>& gaps, 
       // one adds nothing).
       const double far = nearest_picked(cu, cv, lu, lv, d, nc);
       if (!(far > 1e-12)) break;
-      int best = 0;
-      while (!(d[best] == far)) ++best;
+      const int best = first_equal(d, nc, far);
       picked.push_back(cs[best]);
       lu = cu[best];
       lv = cv[best];
@@ -429,8 +544,7 @@ void collide_halfspace_body(CollisionModel& model, int h, const std::vector<int>
       // The first of the farthest, if farther than 1e-12 (as pick_points).
       const double far = nearest_picked(cu, cv, lu, lv, d, nc);
       if (!(far > 1e-12)) break;
-      int best = 0;
-      while (!(d[best] == far)) ++best;
+      const int best = first_equal(d, nc, far);
       m.picked.push_back(best);
       lu = cu[best];
       lv = cv[best];
