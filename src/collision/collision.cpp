@@ -460,6 +460,47 @@ void collide_halfspace(CollisionModel& model, int h, int b) {
   }
 }
 
+// A point's coordinates across the normal: u = (a_x x + a_y y) + a_z z + u0, v likewise.
+struct Across {
+  double ax, ay, az, u0, bx, by, bz, v0;
+  void at(double x, double y, double z, double& u, double& v) const {
+    u = ((ax * x + ay * y) + az * z) + u0;
+    v = ((bx * x + by * y) + bz * z) + v0;
+  }
+};
+
+#ifdef SE3_COLLISION_AVX
+// The candidates cs of a hull (coordinate arrays X, Y, Z, gaps g) four at a time (k from 0,
+// while k + 4 <= k1): gg their gaps, gu and gv their coordinates across the normal (Across::at's
+// operations in each lane); returns the count done.
+__attribute__((target("avx"))) int gather_avx(const double* X, const double* Y, const double* Z,
+                                              const double* g, const int* cs, int k1,
+                                              const Across& c, double* gg, double* gu, double* gv) {
+  const __m256d ax = _mm256_set1_pd(c.ax), ay = _mm256_set1_pd(c.ay), az = _mm256_set1_pd(c.az);
+  const __m256d bx = _mm256_set1_pd(c.bx), by = _mm256_set1_pd(c.by), bz = _mm256_set1_pd(c.bz);
+  const __m256d u0 = _mm256_set1_pd(c.u0), v0 = _mm256_set1_pd(c.v0);
+  int k = 0;
+  for (; k + 4 <= k1; k += 4) {
+    const int i0 = cs[k], i1 = cs[k + 1], i2 = cs[k + 2], i3 = cs[k + 3];
+    const __m256d x = _mm256_set_pd(X[i3], X[i2], X[i1], X[i0]);
+    const __m256d y = _mm256_set_pd(Y[i3], Y[i2], Y[i1], Y[i0]);
+    const __m256d z = _mm256_set_pd(Z[i3], Z[i2], Z[i1], Z[i0]);
+    _mm256_storeu_pd(gg + k, _mm256_set_pd(g[i3], g[i2], g[i1], g[i0]));
+    _mm256_storeu_pd(
+        gu + k,
+        _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, x), _mm256_mul_pd(ay, y)),
+                                    _mm256_mul_pd(az, z)),
+                      u0));
+    _mm256_storeu_pd(
+        gv + k,
+        _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(bx, x), _mm256_mul_pd(by, y)),
+                                    _mm256_mul_pd(bz, z)),
+                      v0));
+  }
+  return k;
+}
+#endif
+
 // Contacts of one body's objects (`group`, all on one frame, at least two) against half-space h,
 // picked together: every object's candidates as collide_halfspace takes them, then of their union
 // the deepest (the first of equal ones), each next the farthest across the normal from those
@@ -516,17 +557,36 @@ void collide_halfspace_body(CollisionModel& model, int h, const std::vector<int>
         if (g[i] < low) low = g[i];
       }
     }
+    // Their entries: gap, coordinates across the normal (a hull's from its coordinate arrays,
+    // four at a time with AVX), owner and point.
     const Vec3 l1 = T.R.transpose() * t1, l2 = T.R.transpose() * t2;
-    const double u0 = t1.dot(T.p), v0 = t2.dot(T.p);
-    for (int k = 0; k < k1; ++k) {
-      const int i = cs[k];
-      m.ggap[nc] = g[i];
-      m.gu[nc] = l1.dot(pts[i]) + u0;
-      m.gv[nc] = l2.dot(pts[i]) + v0;
-      m.gobj[nc] = b;
-      m.gidx[nc] = first + i;
-      ++nc;
+    const Across across{l1.x(), l1.y(), l1.z(), t1.dot(T.p), l2.x(), l2.y(), l2.z(), t2.dot(T.p)};
+    double *gg = m.ggap.data() + nc, *gu = m.gu.data() + nc, *gv = m.gv.data() + nc;
+    int k = 0;
+    if (o.shape.type == ShapeType::Mesh) {
+      const int nv = int(m.hulls[b]->vertices.size());
+      const double* X = m.hull_soa[b].data();
+#ifdef SE3_COLLISION_AVX
+      if (k1 >= 8 && have_avx())
+        k = gather_avx(X, X + nv, X + 2 * nv, g, cs, k1, across, gg, gu, gv);
+#endif
+      for (; k < k1; ++k) {
+        const int i = cs[k];
+        gg[k] = g[i];
+        across.at(X[i], X[nv + i], X[2 * nv + i], gu[k], gv[k]);
+      }
+    } else {
+      for (; k < k1; ++k) {
+        const int i = cs[k];
+        gg[k] = g[i];
+        across.at(pts[i].x(), pts[i].y(), pts[i].z(), gu[k], gv[k]);
+      }
     }
+    for (k = 0; k < k1; ++k) {
+      m.gobj[nc + k] = b;
+      m.gidx[nc + k] = first + cs[k];
+    }
+    nc += k1;
   }
   if (nc == 0) return;
   const double* gap = m.ggap.data();
