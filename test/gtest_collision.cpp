@@ -363,6 +363,124 @@ TEST(Collision, HullOnTheGroundPicksThePlainRulesContacts) {
   EXPECT_GT(many, compared / 3);  // most placements sample three or more contacts
 }
 
+// One body's shapes against the ground pick their contacts together (CollisionOptions::
+// ground_contacts_per_body, on by default): Solo-12's lower leg and its foot on one frame, as
+// the URDF places them (the foot 0.16 m down the leg, on a fixed joint), at random turns and
+// heights with the lowest vertex 3 mm deep to 8 mm up. The body gets at most
+// max_contacts_per_pair contacts, among them the deepest vertex of either hull (naming the hull
+// it belongs to), the rest by farthest-point sampling over the union of
+// both hulls' candidates (checked against the plain rule over world points, to 1e-12), each
+// point a vertex of the hull the contact names. Off, each hull is a pair of its own (up to
+// twice as many contacts); a hull on another frame is never pooled with them.
+TEST(Collision, ABodysShapesShareOneContactBudgetOnTheGround) {
+  const std::string dir =
+      kRoot + "/data/meshes/example-robot-data/robots/solo_description/meshes/stl/with_foot/";
+  Shape leg, foot;
+  std::string err;
+  auto same = [](const std::string& u, std::string*) { return u; };
+  ASSERT_TRUE(load_mesh_shape(dir + "solo_lower_leg_left_side.stl", Vec3::Ones(), same, leg, &err))
+      << err;
+  ASSERT_TRUE(load_mesh_shape(dir + "solo_foot.stl", Vec3::Ones(), same, foot, &err)) << err;
+  const SE3 foot_on_leg = at(0, 0.008, -0.16);
+  std::srand(11);
+  auto uniform = [](double a, double b) { return a + (b - a) * std::rand() / double(RAND_MAX); };
+  int pooled = 0, from_leg = 0, from_foot = 0;
+  for (int max : {1, 2, 3, 4, 6}) {
+    CollisionOptions opt;
+    opt.margin = 0.01;
+    opt.max_contacts_per_pair = max;
+    const std::vector<CollisionObject> objs = {ground(), object("leg", leg, 0),
+                                               object("foot", foot, 0, 1, foot_on_leg),
+                                               object("other foot", foot, 1)};
+    CollisionModel m(objs, opt);
+    opt.ground_contacts_per_body = false;
+    CollisionModel apart(objs, opt);
+    CollisionData d, da;
+    for (int trial = 0; trial < 60; ++trial) {
+      // Foot down, turned up to 0.8 rad off the vertical at random, or at any turn.
+      const Vec3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+      const Mat3 R = rot(axis, trial < 40 ? uniform(0, 0.8) : uniform(0, 3.1));
+      // World points of both hulls (object 1 and 2) and their owners.
+      std::vector<Vec3> pts;
+      std::vector<int> owner;
+      for (int o : {1, 2}) {
+        const SE3 P = o == 1 ? SE3() : foot_on_leg;
+        for (const Vec3& v : m.hull(o)->vertices) {
+          pts.push_back(R * P.act(v));
+          owner.push_back(o);
+        }
+      }
+      double lowest = INFINITY;
+      for (const Vec3& p : pts) lowest = std::min(lowest, p.z());
+      const Vec3 at_xy(uniform(-1, 1), uniform(-1, 1), -lowest + uniform(-0.003, 0.008));
+      const SE3 T(R, at_xy);
+      const SE3 far = at(5, 5, 1);  // the other foot, in the air
+      collide(m, d, {T, far});
+      collide(apart, da, {T, far});
+      // The plain rule over the union, in world points (the deepest first, then farthest).
+      std::vector<int> cand;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        if (pts[i].z() + at_xy.z() < opt.margin) cand.push_back(int(i));
+      }
+      if (cand.empty()) {
+        EXPECT_TRUE(d.contacts.empty());
+        continue;
+      }
+      int deepest = cand[0];
+      for (int i : cand) {
+        if (pts[i].z() < pts[deepest].z()) deepest = i;
+      }
+      std::vector<int> picked = {deepest};
+      std::vector<double> dist(cand.size(), INFINITY);
+      while (int(picked.size()) < max) {
+        const Vec3& last = pts[picked.back()];
+        int best = -1;
+        double best_d = 1e-12;
+        for (std::size_t k = 0; k < cand.size(); ++k) {
+          const Vec3 dp = pts[cand[k]] - last;
+          dist[k] = std::min(dist[k], dp.x() * dp.x() + dp.y() * dp.y());
+          if (dist[k] > best_d) best_d = dist[k], best = int(k);
+        }
+        if (best < 0) break;
+        picked.push_back(cand[best]);
+      }
+      ASSERT_EQ(d.contacts.size(), picked.size()) << max << " " << trial;
+      ASSERT_LE(int(d.contacts.size()), max);
+      // The deepest first, on the hull it belongs to (the layer's gaps are taken in each hull's
+      // frame: the same to rounding).
+      EXPECT_NEAR(d.contacts[0].depth, -(pts[deepest].z() + at_xy.z()), 1e-12)
+          << max << " " << trial;
+      EXPECT_EQ(d.contacts[0].b, owner[deepest]);
+      for (const Contact& c : d.contacts) {
+        EXPECT_EQ(c.a, 0);
+        ASSERT_TRUE(c.b == 1 || c.b == 2);
+        (c.b == 1 ? from_leg : from_foot) += 1;
+        // Its point is a vertex of the hull it names, raised by half its depth.
+        const Vec3 v = c.point - c.depth / 2 * Vec3::UnitZ();
+        bool found = false, listed = false;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          if (owner[i] != c.b || (pts[i] + at_xy - v).norm() > 1e-12) continue;
+          found = true;
+          listed = listed || std::find(picked.begin(), picked.end(), int(i)) != picked.end();
+        }
+        EXPECT_TRUE(found && listed) << max << " " << trial;
+      }
+      for (std::size_t k = 1; k < d.contacts.size(); ++k) {
+        EXPECT_GE(d.contacts[k - 1].depth, d.contacts[k].depth) << "deepest first";
+      }
+      // Each hull on its own: up to max each; the pooled set never more than max.
+      int leg_n = 0, foot_n = 0;
+      for (const Contact& c : da.contacts) (c.b == 1 ? leg_n : foot_n) += 1;
+      EXPECT_LE(leg_n, max);
+      EXPECT_LE(foot_n, max);
+      pooled += int(da.contacts.size()) > max;
+    }
+  }
+  EXPECT_GT(pooled, 100);   // most placements: both hulls within the margin, more than max apart
+  EXPECT_GT(from_leg, 50);  // both hulls give contacts to the pooled set
+  EXPECT_GT(from_foot, 50);
+}
+
 // The narrow phase is skipped for pairs whose bounding boxes are farther apart than the margin
 // (boxes_apart in collision.cpp): it must never skip a pair that is nearer. A box's hull (a
 // mesh) turned at random against a capsule turned at random, placed near each other's faces,

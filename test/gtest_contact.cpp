@@ -293,6 +293,48 @@ TEST(Contact, MeshRobotStandsOnItsMeshFeet) {
   EXPECT_LT(sim->kinetic_energy(), 1e-3);
 }
 
+// solo12_meshes pools each leg's two hulls (its lower leg and its foot, one body) against the
+// ground (`contact: {ground_per_body: true}`, the default): at most max_contacts_per_pair = 4
+// contacts a leg, 16 in all, in every step of 2 s, where each hull on its own gave up to 8 a leg.
+// The robot lands and stands on its feet no deeper than with the hulls apart (7.8e-7 m both).
+TEST(Contact, MeshRobotPoolsEachLegsHullsOnTheGround) {
+  const Scene scene = load_scene(kScenes + "solo12_meshes.yaml");
+  ASSERT_TRUE(scene.ground_per_body);
+  const Model model = scene_model(scene);
+  const SceneCollision sc = scene_collision(scene, &model);  // the simulator's objects, in order
+  double deepest[2] = {0, 0};
+  for (bool per_body : {true, false}) {
+    Scene s = scene;
+    s.ground_per_body = per_body;
+    auto sim = make_simulator(s);
+    std::size_t most = 0;
+    int most_per_body = 0;
+    for (int k = 0; k < 2000; ++k) {
+      ASSERT_EQ(sim->step_n(1), 1) << sim->failure();
+      std::vector<int> per(model.n + 1, 0);
+      for (const Contact& c : sim->contacts()) {
+        ASSERT_GE(sc.body[c.b], 0);
+        most_per_body = std::max(most_per_body, ++per[sc.body[c.b]]);
+      }
+      most = std::max(most, sim->contacts().size());
+    }
+    deepest[per_body] = sim->penetration_max();
+    std::printf(
+        "solo12_meshes, ground_per_body %d: at most %zu contacts, %d a body; deepest %.3g m, "
+        "base z %.4f m\n",
+        int(per_body), most, most_per_body, sim->penetration_max(), sim->state().base.p.z());
+    EXPECT_GT(sim->state().base.p.z(), 0.2);  // standing (0.238 m), not on its knees or belly
+    if (per_body) {
+      EXPECT_EQ(most_per_body, 4);
+      EXPECT_LE(most, 16u);
+    } else {
+      EXPECT_EQ(most_per_body, 8);
+    }
+  }
+  EXPECT_LT(deepest[1], 1e-6);
+  EXPECT_LE(deepest[1], deepest[0]);
+}
+
 // A contact scene that names another integrator (rkmk4) keeps that integrator's steps while no
 // limit or contact is within reach (bit for bit the same states as without the ground), and
 // takes the steps with contact by the contact scheme (counted as velocity steps).

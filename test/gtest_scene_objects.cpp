@@ -65,7 +65,7 @@ TEST(SceneObjects, BlockListOfEveryShape) {
       "solo_foot.stl, scale: [2, 2, 2]}\n"
       "    mass: 0.1\n"
       "self_collision: true\n"
-      "contact: {margin: 0.02, max_contacts_per_pair: 8}\n"
+      "contact: {margin: 0.02, max_contacts_per_pair: 8, ground_per_body: false}\n"
       "srdf: meshes/example-robot-data/robots/panda_description/srdf/panda.srdf\n";
   const Scene s = parse_scene(text, kData, "s.yaml");
   EXPECT_TRUE(s.robot.empty());
@@ -117,6 +117,8 @@ TEST(SceneObjects, BlockListOfEveryShape) {
   EXPECT_TRUE(s.self_collision);
   EXPECT_DOUBLE_EQ(s.contact_margin, 0.02);
   EXPECT_EQ(s.max_contacts_per_pair, 8);
+  EXPECT_FALSE(s.ground_per_body);
+  EXPECT_TRUE(parse_scene("name: x\n", kData, "d.yaml").ground_per_body);  // the default
   EXPECT_NE(s.srdf.find("panda.srdf"), std::string::npos);
   EXPECT_EQ(s.srdf[0], '/');  // resolved against the scene's folder
 }
@@ -276,9 +278,12 @@ TEST(SceneCollision, FramesOfRobotAndObjects) {
 }
 
 // Solo-12's collision shapes are all meshes: on the ground they must touch it (the humanoid of
-// issue 14 fell 18 m because meshes were skipped).
+// issue 14 fell 18 m because meshes were skipped). Each shape a pair of its own here
+// (ground_per_body: false), so that the meshes' contacts are not pooled with the scene's contact
+// spheres on the same links (lower still); pooled, each body keeps its deepest point.
 TEST(SceneCollision, MeshOnlyRobotTouchesTheGround) {
-  const Scene s = load_scene(kRoot + "/config/scenes/quadruped_ground.yaml");
+  Scene s = load_scene(kRoot + "/config/scenes/quadruped_ground.yaml");
+  s.ground_per_body = false;
   const Model m = scene_model(s);
   SceneCollision sc = scene_collision(s, &m);
   EXPECT_TRUE(sc.warnings.empty()) << sc.warnings[0];
@@ -322,6 +327,35 @@ TEST(SceneCollision, MeshOnlyRobotTouchesTheGround) {
   }
   EXPECT_NEAR(deepest, 0.001, 1e-9);
   EXPECT_EQ(touching.size(), 4u);  // the four feet, equally low at the scene's joint angles
+  // Pooled by body (the default): at most 4 contacts a body, each body's deepest contact that of
+  // its deepest shape above (the spheres' where they are lower), the same four feet touching.
+  {
+    Scene pooled_scene = s;
+    pooled_scene.ground_per_body = true;
+    SceneCollision pc = scene_collision(pooled_scene, &m);
+    ASSERT_EQ(pc.model.objects().size(), objs.size());
+    CollisionData pd;
+    collide(pc.model, pd, frames);
+    std::vector<double> apart(m.n + 1, -INFINITY), pooled(m.n + 1, -INFINITY);
+    std::vector<int> count(m.n + 1, 0);
+    std::set<int> touching_pooled;
+    for (const Contact& c : d.contacts) {
+      if (c.a == sc.ground) apart[sc.body[c.b]] = std::max(apart[sc.body[c.b]], c.depth);
+    }
+    for (const Contact& c : pd.contacts) {
+      if (c.a != pc.ground) continue;
+      const int b = pc.body[c.b];
+      pooled[b] = std::max(pooled[b], c.depth);
+      ++count[b];
+      if (c.depth > 0) touching_pooled.insert(b);
+    }
+    for (int b = 0; b <= m.n; ++b) {
+      EXPECT_LE(count[b], 4) << b;
+      EXPECT_EQ(pooled[b], apart[b]) << b;
+    }
+    EXPECT_LT(pd.contacts.size(), d.contacts.size());
+    EXPECT_EQ(touching_pooled, touching);  // the four feet
+  }
   // 5 cm up, beyond the margin: no ground contact.
   x.base.p.z() += 0.05;
   forward_kinematics(m, data, x.base, x.q);

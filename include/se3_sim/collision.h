@@ -49,6 +49,10 @@ struct CollisionOptions {
   double margin = 0.01;         ///< m: pairs closer than this report a contact with depth < 0
   bool self_collision = false;  ///< group-0 pairs (robot link against robot link)
   int max_contacts_per_pair = 4;
+  /// Against a half-space (the ground), the shapes of one frame (a body's) pick their contacts
+  /// together: max_contacts_per_pair for the body, from the union of their candidate points
+  /// (the deepest always kept). Off: each shape is a pair of its own.
+  bool ground_contacts_per_body = true;
   /// SRDF <disable_collisions link1 link2>: link-name pairs never tested.
   std::vector<std::pair<std::string, std::string>> disabled_links;
   /// Frames joined by a joint (parent, child); their objects never collide.

@@ -48,7 +48,9 @@ struct SceneError : std::runtime_error {
 ///   objects: [{name, shape, mass, inertia, pose, twist, mu, restitution, color}, ...]
 ///       rigid bodies beside the robot (scene_objects.h); a scene may have objects and no robot
 ///   srdf: robot.srdf                self_collision: false
-///   contact: {margin: 0.01, max_contacts_per_pair: 4}    (the collision layer's options)
+///   contact: {margin: 0.01, max_contacts_per_pair: 4, ground_per_body: true}
+///       (the collision layer's options; ground_per_body: a body's shapes share one budget of
+///       max_contacts_per_pair on the ground, CollisionOptions::ground_contacts_per_body)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -88,6 +90,7 @@ struct Scene {
   bool self_collision = false;    ///< `self_collision:` robot links against each other
   double contact_margin = 0.01;   ///< `contact: {margin}` m: gaps reported as contacts
   int max_contacts_per_pair = 4;  ///< `contact: {max_contacts_per_pair}`
+  bool ground_per_body = true;    ///< `contact: {ground_per_body}`: one budget a body
 };
 
 /// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.

@@ -132,9 +132,11 @@ void read_controllers(const SceneReader& r, const Field& v, Scene& s) {
 }
 
 void read_contact(const SceneReader& r, const Field& v, Scene& s) {
-  for (const Field& f : r.fields(v, {"margin", "max_contacts_per_pair"})) {
+  for (const Field& f : r.fields(v, {"margin", "max_contacts_per_pair", "ground_per_body"})) {
     if (f.name == "margin") {
       s.contact_margin = r.non_negative(f);
+    } else if (f.name == "ground_per_body") {
+      s.ground_per_body = r.boolean(f);
     } else {
       s.max_contacts_per_pair = static_cast<int>(r.integer(f, 1, 64));
     }

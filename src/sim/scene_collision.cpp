@@ -46,6 +46,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
   CollisionOptions opt;
   opt.margin = scene.contact_margin;
   opt.max_contacts_per_pair = scene.max_contacts_per_pair;
+  opt.ground_contacts_per_body = scene.ground_per_body;
   opt.self_collision = scene.self_collision;
   std::vector<std::string> warnings;
   const double robot_mu = scene.constraints.mu;

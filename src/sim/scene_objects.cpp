@@ -13,7 +13,7 @@
 //       color: [0.8, 0.2, 0.2]               # or [r, g, b, a], in [0, 1]
 //   srdf: data/robots/panda.srdf             # relative to the scene file
 //   self_collision: false
-//   contact: {margin: 0.01, max_contacts_per_pair: 4}
+//   contact: {margin: 0.01, max_contacts_per_pair: 4, ground_per_body: true}
 // The default inertia is that of the shape at uniform density; a mesh's is that of its convex
 // hull (the shape it collides as), about the hull's centroid.
 #include <sys/stat.h>
