@@ -197,15 +197,22 @@ template <int Kind>
 using JointOfKind =
     std::conditional_t<(Kind < 40), AxisJoint<2, Kind / 8, Kind % 8>, AxisJoint<5, Kind - 40>>;
 
-// The cases of with_joint's switch, eight at a time.
+// The cases of with_joint's switch, eight at a time (one case a line; clang-format would
+// otherwise reflow the macro differently on every pass).
+// clang-format off
 #define SE3_JOINT_CASE(k) \
   case k:                 \
     return f(JointOfKind<k>());
-#define SE3_JOINT_CASES8(b)                                                               \
-  SE3_JOINT_CASE(b)                                                                       \
-  SE3_JOINT_CASE(b + 1)                                                                   \
-  SE3_JOINT_CASE(b + 2) SE3_JOINT_CASE(b + 3) SE3_JOINT_CASE(b + 4) SE3_JOINT_CASE(b + 5) \
-      SE3_JOINT_CASE(b + 6) SE3_JOINT_CASE(b + 7)
+#define SE3_JOINT_CASES8(b) \
+  SE3_JOINT_CASE(b)         \
+  SE3_JOINT_CASE(b + 1)     \
+  SE3_JOINT_CASE(b + 2)     \
+  SE3_JOINT_CASE(b + 3)     \
+  SE3_JOINT_CASE(b + 4)     \
+  SE3_JOINT_CASE(b + 5)     \
+  SE3_JOINT_CASE(b + 6)     \
+  SE3_JOINT_CASE(b + 7)
+// clang-format on
 
 /// f(AxisJoint<K, F, PM>()) for the joint of a moving body (Model::validate admits no other joint
 /// on bodies 1..n): K from its type, F its form (z_rotation, axis_row), PM its offset_axes
