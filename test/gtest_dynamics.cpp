@@ -544,6 +544,58 @@ TEST(Dynamics, MinvRoutesAgree) {
   std::printf("minv factor route vs recursion: %.3g x cond\n", worst);
 }
 
+// D's factor along the tree (mass_matrix_ltdl) on every model and two ill-conditioned chains:
+// L^T Diag L rebuilds D, L has no entry off the dofs' ancestors (no fill-in: what lets the
+// Delassus products walk ancestors alone), the pivots are the recursion's 1 / (S^T IA S), and
+// the two triangular solves apply D^-1 (L^-1 Diag^-1 L^-T b = D^-1 b).
+TEST(Dynamics, MassMatrixFactorAlongTheTree) {
+  std::vector<Case> all = cases();
+  all.push_back({"chain20 {1e-2,1,1e2} floating", make_chain(20, true, {1e-2, 1, 100})});
+  all.push_back({"chain44 {1e-2,1,1e2} fixed", make_chain(44, false, {1e-2, 1, 100})});
+  for (const Case& c : all) {
+    const Model& m = c.model;
+    Data data(m), rec(m);
+    rec.minv_by_factor = false;
+    std::mt19937_64 rng(55);
+    for (int k = 0; k < kStates; ++k) {
+      const RandomState s = se3_test::random_state(m, rng);
+      const MatX D = crba(m, rec, s.base, s.q);
+      const MatX& LD = mass_matrix_ltdl(m, data, s.base, s.q);
+      MatX L = MatX::Identity(m.nv, m.nv);
+      VecX diag(m.nv);
+      for (int i = 0; i < m.nv; ++i) {
+        diag[i] = LD(i, i);
+        EXPECT_EQ(data.Dinv[i], 1.0 / diag[i]) << c.label;
+        for (int j = 0; j < i; ++j) {
+          bool ancestor = false;
+          for (int a = data.v_parent[i]; a >= 0; a = data.v_parent[a]) ancestor |= a == j;
+          if (ancestor) {
+            L(i, j) = LD(i, j);
+          } else {
+            ASSERT_EQ(LD(i, j), 0.0) << c.label << ": fill-in at " << i << ", " << j;
+          }
+        }
+      }
+      const MatX rebuilt = L.transpose() * diag.asDiagonal() * L;
+      EXPECT_LT(rel_err(rebuilt, D), 1e-14) << c.label;
+      minv(m, rec, s.base, s.q);
+      for (int i = m.nv_base(); i < m.nv; ++i) {
+        EXPECT_LT(std::abs(data.Dinv[i] - rec.Dinv[i]), 1e-9 * std::abs(rec.Dinv[i]))
+            << c.label << " dof " << i;
+      }
+      const VecX b = VecX::Random(m.nv);
+      VecX x = b;
+      ltdl_solve_lt(data, x.data());
+      for (int i = 0; i < m.nv; ++i) x[i] *= data.Dinv[i];
+      ltdl_solve_l(data, x.data());
+      const VecX ref = D.llt().solve(b);
+      const Eigen::JacobiSVD<MatX> svd(D);
+      const double cond = svd.singularValues()(0) / svd.singularValues()(m.nv - 1);
+      EXPECT_LT(rel_err(x, ref), std::max(1e-12, 1e-15 * 20 * cond)) << c.label;
+    }
+  }
+}
+
 // The default route is the cheaper one (docs/performance.md): the factorization for small
 // shallow trees (the arms, short chains), the recursion for the quadrupeds and long chains.
 TEST(Dynamics, MinvPicksItsRouteBySize) {

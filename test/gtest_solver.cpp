@@ -11,15 +11,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "se3_sim/constraint.h"
 #include "se3_sim/solver.h"
 #include "test_util.h"
+
+namespace {
+const char* g_self = nullptr;  // this test binary (main)
+}  // namespace
 
 using namespace se3;
 
@@ -299,6 +306,7 @@ TEST(Solver, StackOfThreeIsSoftUnderFewPgsSweepsAndExactUnderTheActiveSet) {
 }
 
 int main(int argc, char** argv) {
+  g_self = argv[0];
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
@@ -385,6 +393,150 @@ TEST(Delassus, RobotBlockIsTheDenseProductWithContactsOnEveryLink) {
       EXPECT_EQ(nonzero, 6 + depth) << "row " << r;
     }
   }
+}
+
+namespace {
+
+// The factored products over solo12's rows (below) and the dense ones.
+struct FactoredProblem {
+  MatX W, Wd;
+  VecX v, vd;
+  FactoredProblem() {
+    UrdfOptions opt;
+    opt.floating = true;
+    const Model m = model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
+    std::mt19937_64 rng(19);
+    const se3_test::RandomState s = se3_test::random_state(m, rng);
+    Data data(m);
+    forward_kinematics(m, data, s.base, s.q);
+    SystemKinematics kin;
+    kin.reset(m, data.oMb, 0);
+    kin.update_world_axes();
+    const int nv = m.nv + 6;
+    ConstraintRows rows;
+    rows.reserve(nv, 3 * (m.n + 1) + 20 + 5);
+    auto contact = [&](int i) {
+      const Vec3 p = data.oMb[i].act(se3_test::random_vec(rng, 3, 0.05));
+      const int r = rows.add(RowType::ContactNormal, i);
+      point_jacobian(kin, i, p, se3_test::random_unit(rng), 1.0, rows.row(r));
+      return r;
+    };
+    for (int i = 0; i <= m.n; ++i) {
+      for (int k = 0; k < 3; ++k) contact(i);
+    }
+    for (int k = 0; k < 20; ++k) contact(std::uniform_int_distribution<int>(0, m.n)(rng));
+    for (int leg = 0; leg < 3; ++leg) {
+      const int a = 3 * leg + 3, b = 3 * leg + 6;
+      const Vec3 d = se3_test::random_unit(rng);
+      const int r = rows.add(RowType::ContactNormal, leg);
+      point_jacobian(kin, a, data.oMb[a].act(se3_test::random_vec(rng, 3, 0.05)), d, 1.0,
+                     rows.row(r));
+      point_jacobian(kin, b, data.oMb[b].act(se3_test::random_vec(rng, 3, 0.05)), d, -1.0,
+                     rows.row(r));
+    }
+    const int body_only = rows.add(RowType::ContactNormal, 0);
+    rows.J.row(body_only).tail<6>() = se3_test::random_vec(rng, 6, 1.0).transpose();
+    const int both = contact(5);
+    rows.J.row(both).tail<6>() = se3_test::random_vec(rng, 6, 1.0).transpose();
+    const int n = rows.count;
+
+    // D^-1: the robot's, and a free body's (a random symmetric positive definite 6 x 6).
+    const MatX Minv = minv(m, data, s.base, s.q);
+    MatX A(6, 6);  // from rng (Eigen's Random draws on std::rand, which other tests move)
+    for (int k = 0; k < 36; ++k) A.data()[k] = std::uniform_real_distribution<double>(-1, 1)(rng);
+    const MatX B = (A * A.transpose() + MatX::Identity(6, 6)).inverse();
+    MatX Dinv = MatX::Zero(nv, nv);
+    Dinv.topLeftCorner(m.nv, m.nv) = Minv;
+    Dinv.bottomRightCorner(6, 6) = B;
+    const MatX J = rows.J.topRows(n);
+    Wd = J * Dinv * J.transpose();
+
+    std::vector<std::uint64_t> mask(n, 0);
+    for (int r = 0; r < n; ++r) {
+      if (!J.row(r).head(m.nv).isZero(0)) mask[r] |= 1;
+      if (!J.row(r).tail<6>().isZero(0)) mask[r] |= 2;
+    }
+    mass_matrix_ltdl(m, data, s.base, s.q);
+    MatX Y = MatX::Constant(nv, n, std::numeric_limits<double>::quiet_NaN());
+    W = MatX::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+    DelassusColumns d;
+    d.reserve(n, 2);
+    d.reserve_factored(n, m.nv);
+    d.width[0] = m.nv;
+    d.first[1] = m.nv;
+    d.width[1] = 6;
+    d.dinv[1] = B.data();
+    d.factor = &data;
+    d.J = &rows.J;
+    d.Y = &Y;
+    d.W = &W;
+    d.mask = mask.data();
+    delassus_begin(d, n);
+    delassus_complete(d);
+    VecX p = VecX::Zero(n);
+    for (int r = 0; r < n; r += 2) p[r] = std::uniform_real_distribution<double>(-1, 1)(rng);
+    p[both] = 0.5;
+    v = VecX::Zero(nv);
+    delassus_impulse_velocity(d, p, v);
+    vd = Dinv * J.transpose() * p;
+  }
+};
+
+// The bits of a matrix, as one number (FNV-1a over its bytes).
+template <class M>
+std::uint64_t bits_hash(const M& a) {
+  std::uint64_t h = 1469598103934665603ull;
+  const auto* b = reinterpret_cast<const unsigned char*>(a.data());
+  for (std::size_t k = 0; k < sizeof(double) * static_cast<std::size_t>(a.size()); ++k) {
+    h = (h ^ b[k]) * 1099511628211ull;
+  }
+  return h;
+}
+
+}  // namespace
+
+// The robot's block by its mass matrix's factor (DelassusColumns::factor: Z = J L^-T, each
+// column summed over the dofs its row touches, each dof over the rows that touch it) equals the
+// dense products: solo12 with contacts on every link in link order, then at random links out of
+// order (a dof's rows are no longer one run: the rows between must read as zero), rows between
+// two legs, a row on a free body alone and one on the robot and the free body together. And
+// v += D^-1 J^T p through the factor is the dense product's.
+TEST(Delassus, FactoredRobotBlockIsTheDenseProduct) {
+  const FactoredProblem f;
+  std::printf("factored Delassus against the dense product: W %.2g, D^-1 J^T p %.2g (relative)\n",
+              se3_test::rel_err(f.W, f.Wd), se3_test::rel_err(f.v, f.vd));
+  EXPECT_LT(se3_test::rel_err(f.W, f.Wd), 1e-13);
+  EXPECT_LT(se3_test::rel_err(f.v, f.vd), 1e-13);
+  // Every row of W is well above the tolerance in some entry (a dropped dof shows).
+  for (int r = 0; r < f.W.rows(); ++r) {
+    EXPECT_GT(f.Wd.row(r).cwiseAbs().maxCoeff(), 1e-3 * f.Wd.norm()) << r;
+  }
+}
+
+// The fused loops run four rows at a time with AVX where the machine has it, two with SSE2
+// otherwise (SE3_SIM_NO_AVX=1): both give the same bits. This binary runs itself with the
+// variable set and compares the hash of W and D^-1 J^T p it prints.
+TEST(Delassus, FactoredProductsHaveTheSameBitsOnTheSse2Path) {
+  const FactoredProblem f;
+  const std::uint64_t h = bits_hash(f.W) ^ (bits_hash(f.v) * 31);
+  if (std::getenv("SE3_SIM_NO_AVX")) {
+    std::printf("factored bits %016llx\n", static_cast<unsigned long long>(h));
+    return;
+  }
+  ASSERT_NE(g_self, nullptr);
+  const std::string cmd = std::string("SE3_SIM_NO_AVX=1 '") + g_self +
+                          "' --gtest_filter=Delassus.FactoredProductsHaveTheSameBitsOnTheSse2Path";
+  FILE* out = popen(cmd.c_str(), "r");
+  ASSERT_NE(out, nullptr);
+  char line[256];
+  unsigned long long other = 0;
+  bool found = false;
+  while (std::fgets(line, sizeof line, out)) {
+    found = found || std::sscanf(line, "factored bits %llx", &other) == 1;
+  }
+  EXPECT_EQ(pclose(out), 0);
+  ASSERT_TRUE(found) << "the SSE2 run printed no hash";
+  EXPECT_EQ(other, static_cast<unsigned long long>(h));
 }
 
 namespace {

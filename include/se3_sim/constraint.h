@@ -124,7 +124,23 @@ struct DelassusColumns {
   int rows = 0;
   int formed = 0;  ///< columns formed since delassus_begin
 
+  /// System 0 (the robot, J's first width[0] columns) by its mass matrix's factor D = L^T Diag L
+  /// (mass_matrix_ltdl on *factor) instead of a dense block dinv[0]: D^-1 = L^-1 Diag^-1 L^-T,
+  /// so with Z = J L^-T (formed for every row by delassus_begin, O(depth^2) a row)
+  /// W(r, j) = sum_a Z(r, a) Z(j, a) / Diag_a over the dofs a both rows' Z rows touch, each dof's
+  /// column of Z summed over the rows [lo_a, hi_a) that touch it. Y's robot rows are then not
+  /// formed: delassus_impulse_velocity applies D^-1 J^T p through the factor. Needs width[0] <= 64.
+  const Data* factor = nullptr;
+  MatX Z;                            ///< capacity x width[0]: J L^-T (column-major, by dof)
+  std::vector<std::uint64_t> zmask;  ///< per row: the dofs its row of Z touches
+  std::vector<int> lo, hi;           ///< per dof: the rows of Z's column that may be non-zero
+  VecX g;                            ///< width[0]: delassus_impulse_velocity's workspace
+  std::vector<double*> ptr;          ///< width[0]: columns of Z one pass reads or writes
+  std::vector<double> coef;          ///< width[0]: their coefficients
+
   void reserve(int capacity, int systems);
+  /// Sizes the factored mode's workspaces for a robot of nv dofs.
+  void reserve_factored(int capacity, int nv);
 };
 
 /// A new step of `rows` rows: no column formed.
@@ -134,6 +150,8 @@ const double* delassus_column(DelassusColumns& d, int j);
 /// Every column not formed yet (then W's first rows x rows block is the whole, symmetric to
 /// rounding).
 void delassus_complete(DelassusColumns& d);
+/// v += D^-1 J^T p over the rows with p_r != 0 (their columns formed first; v has J's columns).
+void delassus_impulse_velocity(DelassusColumns& d, const VecX& p, VecX& v);
 
 /// row[col0 + k] += s d . (v_k + w_k x p) over the coordinates k that move `body` (its path to the
 /// root, a free base's six): the velocity of the world point p fixed on `body` along the world

@@ -155,7 +155,7 @@ struct ConstraintReport {
   double bilateral_error = 0;         ///< max |phi| of the bilateral rows after the step
   double penetration = 0;             ///< deepest contact penetration (m, >= 0)
   double limit_violation = 0;         ///< largest excursion beyond a joint limit (>= 0)
-  int delassus_columns = 0;  ///< W's columns the last solve formed (rows: the full product)
+  int delassus_columns = 0;     ///< W's columns the last solve formed (rows: the full product)
   std::uint64_t fallbacks = 0;  ///< active-set solves that fell back to PGS (cumulative)
 };
 
@@ -228,6 +228,12 @@ class ConstraintSystem final : public AccelerationHook {
   double error(const State& x);
 
   /// Forces of the last step, one per constraint / limit / contact point (world frame).
+  /// The robot's body poses (world) at (base, q): the forward kinematics the next velocity
+  /// step's rows reuse when it starts at the same configuration.
+  const std::vector<SE3>& body_poses(const SE3& base, const VecX& q) {
+    kinematics(base, q, nullptr);
+    return data_.oMb;
+  }
   const std::vector<ConstraintForce>& forces() const { return forces_; }
   const ConstraintReport& report() const { return report_; }
 
@@ -254,6 +260,11 @@ class ConstraintSystem final : public AccelerationHook {
   void bind();
   /// Forward kinematics, world axes and (with v) the body twists and bias accelerations.
   void kinematics(const SE3& base, const VecX& q, const VecX* v);
+  /// Whether data_'s forward kinematics (oMb, kin_'s world axes) is at (base, q).
+  bool kinematics_at(const SE3& base, const VecX& q) const;
+  /// Before an algorithm runs on data_ at (base, q): a pass at another configuration leaves
+  /// data_'s kinematics stale for kinematics()'s reuse.
+  void data_to(const SE3& base, const VecX& q);
   /// phi_, Psi_ and (with_bias, after kinematics with v) gamma_ = Psi_dot w.
   void fill_bilateral(bool with_bias);
   Vec3 point_world(const PointRef& p) const;
@@ -294,6 +305,11 @@ class ConstraintSystem final : public AccelerationHook {
   double alpha_ = 0, beta2_ = 0;
 
   Data data_;
+  // The configuration data_'s forward kinematics is at, while fk_current_: kinematics() at the
+  // same one (the collision layer's poses, then the step's rows) makes no second pass.
+  bool fk_current_ = false;
+  SE3 fk_base_;
+  VecX fk_q_;
   SystemKinematics kin_;  ///< the robot's, over data_.oMb
   std::vector<Vec6> Vb_;  ///< body twists (body frame)
   std::vector<Vec6> Ab_;  ///< velocity-product accelerations (body frame, wdot = 0)
@@ -320,6 +336,7 @@ class ConstraintSystem final : public AccelerationHook {
   std::vector<std::uint64_t> row_mask_;  ///< per row: bit s set when it touches system s
   DelassusWorkspace delassus_ws_;        ///< robot_delassus's
   DelassusColumns lazy_w_;               ///< W_'s columns on demand (the active set's)
+  bool factored_delassus_ = false;       ///< lazy_w_'s robot block by its factor (nv <= 64)
   std::vector<Vec3> warm_contact_;       ///< last impulses (n, t1, t2) per contact sphere
   /// Contacts from outside (the collision layer) have no identity across steps: the last
   /// step's are kept with their world impulse, and a new contact of the same object pair takes

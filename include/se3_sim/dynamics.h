@@ -74,6 +74,9 @@ struct Data {
   VecX nle;   ///< bias: H
   MatX M;     ///< crba: the mass matrix (nv x nv, both triangles); empty before the first call
   MatX Minv;  ///< minv: D^-1 (nv x nv, both triangles); empty before the first call
+  /// mass_matrix_ltdl: D = L^T Diag L, L's strict lower triangle and Diag on the diagonal (the
+  /// upper triangle holds D's); sized with M
+  MatX LD;
 
   // ---- algorithm workspaces (contents unspecified between calls)
   /// crba (world frame): the joint axes in the world, one row per twist component, so that a row
@@ -137,6 +140,16 @@ const VecX& aba(const Model& model, Data& data, const SE3& base, const VecX& q, 
 
 /// Mass matrix D (eq. 50) by the composite-rigid-body algorithm; both triangles filled.
 const MatX& crba(const Model& model, Data& data, const SE3& base, const VecX& q);
+
+/// crba's D factorized along the tree, D = L^T Diag L (Featherstone's LTDL): L unit lower
+/// triangular with L(k, i) != 0 only for i an ancestor dof of k (Data::v_parent), so the
+/// factorization has no fill-in and costs sum over dofs of depth^2. Returns Data::LD; sets
+/// Data::Dinv to 1 / Diag. O(n d^2) against O(n^2) for D^-1, and the solves below use it.
+const MatX& mass_matrix_ltdl(const Model& model, Data& data, const SE3& base, const VecX& q);
+/// x <- L^-T x (nv entries) with L from the last mass_matrix_ltdl on data.
+void ltdl_solve_lt(const Data& data, double* x);
+/// x <- L^-1 x (nv entries): D^-1 b = L^-1 Diag^-1 L^-T b.
+void ltdl_solve_l(const Data& data, double* x);
 
 /// D^-1, both triangles: by the recursive factorization of eqs. (55)-(63), O(n) per column, or
 /// for small shallow trees by factorizing crba's D (Data::minv_by_factor says which).

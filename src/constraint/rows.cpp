@@ -2,7 +2,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <stdexcept>
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 
 #include "se3_sim/constraint.h"
 
@@ -144,10 +152,250 @@ void DelassusColumns::reserve(int capacity, int systems) {
   done.assign(capacity, 0);
 }
 
+void DelassusColumns::reserve_factored(int capacity, int nv) {
+  Z = MatX::Zero(capacity, nv);
+  zmask.assign(capacity, 0);
+  lo.assign(nv, 0);
+  hi.assign(nv, 0);
+  g = VecX::Zero(nv);
+  ptr.assign(nv, nullptr);
+  coef.assign(nv, 0.0);
+}
+
+namespace {
+
+// The factored Delassus's two inner loops, over a block of rows with several of Z's columns at
+// once, so that each row's entry is loaded and stored once for all of them (a loop per column
+// would reload it for each). Each destination gets its terms in the column order given, as a
+// loop per column would: the same rounding. M columns at a time, unrolled.
+//   gather:  out[r] += sum_t c[t] z[t][r]
+//   scatter: z[t][r] -= c[t] src[r]
+constexpr int kFuse = 8;
+
+template <int M>
+void gather_fixed(double* out, const double* const* z, const double* c, int n) {
+  int r = 0;
+#ifdef __SSE2__
+  __m128d ct[M];
+  for (int t = 0; t < M; ++t) ct[t] = _mm_set1_pd(c[t]);
+  for (; r + 2 <= n; r += 2) {
+    __m128d acc = _mm_loadu_pd(out + r);
+    for (int t = 0; t < M; ++t) acc = _mm_add_pd(acc, _mm_mul_pd(ct[t], _mm_loadu_pd(z[t] + r)));
+    _mm_storeu_pd(out + r, acc);
+  }
+#endif
+  for (; r < n; ++r) {
+    double acc = out[r];
+    for (int t = 0; t < M; ++t) acc += c[t] * z[t][r];
+    out[r] = acc;
+  }
+}
+
+template <int M>
+void scatter_fixed(double* const* z, const double* c, const double* src, int n) {
+  int r = 0;
+#ifdef __SSE2__
+  __m128d ct[M];
+  for (int t = 0; t < M; ++t) ct[t] = _mm_set1_pd(c[t]);
+  for (; r + 2 <= n; r += 2) {
+    const __m128d s = _mm_loadu_pd(src + r);
+    for (int t = 0; t < M; ++t) {
+      _mm_storeu_pd(z[t] + r, _mm_sub_pd(_mm_loadu_pd(z[t] + r), _mm_mul_pd(ct[t], s)));
+    }
+  }
+#endif
+  for (; r < n; ++r) {
+    for (int t = 0; t < M; ++t) z[t][r] -= c[t] * src[r];
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define SE3_ROWS_AVX 1
+// The same loops four rows at a time (AVX, no FMA: the same products and sums, the same bits),
+// chosen at run time; SE3_SIM_NO_AVX set in the environment keeps the SSE2 ones.
+bool rows_use_avx() {
+  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("SE3_SIM_NO_AVX");
+  return avx;
+}
+
+template <int M>
+__attribute__((target("avx"))) void gather_fixed_avx(double* out, const double* const* z,
+                                                     const double* c, int n) {
+  int r = 0;
+  __m256d ct[M];
+  for (int t = 0; t < M; ++t) ct[t] = _mm256_set1_pd(c[t]);
+  for (; r + 4 <= n; r += 4) {
+    __m256d acc = _mm256_loadu_pd(out + r);
+    for (int t = 0; t < M; ++t) {
+      acc = _mm256_add_pd(acc, _mm256_mul_pd(ct[t], _mm256_loadu_pd(z[t] + r)));
+    }
+    _mm256_storeu_pd(out + r, acc);
+  }
+  for (; r < n; ++r) {
+    double acc = out[r];
+    for (int t = 0; t < M; ++t) acc += c[t] * z[t][r];
+    out[r] = acc;
+  }
+}
+
+template <int M>
+__attribute__((target("avx"))) void scatter_fixed_avx(double* const* z, const double* c,
+                                                      const double* src, int n) {
+  int r = 0;
+  __m256d ct[M];
+  for (int t = 0; t < M; ++t) ct[t] = _mm256_set1_pd(c[t]);
+  for (; r + 4 <= n; r += 4) {
+    const __m256d s = _mm256_loadu_pd(src + r);
+    for (int t = 0; t < M; ++t) {
+      _mm256_storeu_pd(z[t] + r, _mm256_sub_pd(_mm256_loadu_pd(z[t] + r), _mm256_mul_pd(ct[t], s)));
+    }
+  }
+  for (; r < n; ++r) {
+    for (int t = 0; t < M; ++t) z[t][r] -= c[t] * src[r];
+  }
+}
+#endif
+
+// One instantiation of kernel K<M> per count 1..kFuse: m columns, kFuse at a time.
+#define SE3_FUSED_SWITCH(K, ...)   \
+  switch (m < kFuse ? m : kFuse) { \
+    case 1:                        \
+      K<1>(__VA_ARGS__);           \
+      break;                       \
+    case 2:                        \
+      K<2>(__VA_ARGS__);           \
+      break;                       \
+    case 3:                        \
+      K<3>(__VA_ARGS__);           \
+      break;                       \
+    case 4:                        \
+      K<4>(__VA_ARGS__);           \
+      break;                       \
+    case 5:                        \
+      K<5>(__VA_ARGS__);           \
+      break;                       \
+    case 6:                        \
+      K<6>(__VA_ARGS__);           \
+      break;                       \
+    case 7:                        \
+      K<7>(__VA_ARGS__);           \
+      break;                       \
+    default:                       \
+      K<8>(__VA_ARGS__);           \
+      break;                       \
+  }
+
+void gather(double* out, const double* const* z, const double* c, int m, int n) {
+#ifdef SE3_ROWS_AVX
+  if (rows_use_avx()) {
+    for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
+      SE3_FUSED_SWITCH(gather_fixed_avx, out, z, c, n)
+    }
+    return;
+  }
+#endif
+  for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
+    SE3_FUSED_SWITCH(gather_fixed, out, z, c, n)
+  }
+}
+
+void scatter(double* const* z, const double* c, const double* src, int m, int n) {
+#ifdef SE3_ROWS_AVX
+  if (rows_use_avx()) {
+    for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
+      SE3_FUSED_SWITCH(scatter_fixed_avx, z, c, src, n)
+    }
+    return;
+  }
+#endif
+  for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
+    SE3_FUSED_SWITCH(scatter_fixed, z, c, src, n)
+  }
+}
+#undef SE3_FUSED_SWITCH
+
+// The robot's columns of row r that are non-zero, as a mask.
+std::uint64_t nonzero_columns(const double* j, int nv) {
+  std::uint64_t m = 0;
+  int a = 0;
+#ifdef __SSE2__
+  const __m128d zero = _mm_setzero_pd();
+  for (; a + 2 <= nv; a += 2) {
+    const int bits = _mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(j + a), zero));
+    m |= static_cast<std::uint64_t>(bits) << a;
+  }
+#endif
+  for (; a < nv; ++a) m |= std::uint64_t(j[a] != 0) << a;
+  return m;
+}
+
+// Z = J L^-T over the robot's columns of the step's rows, with each row's dofs and each dof's
+// rows (DelassusColumns::factor). Consecutive rows with the same non-zero columns (a contact's
+// three, a leg's contacts) form a group: its dofs are found once, and L^-T runs over its rows
+// as one block, a column (dof) at a time.
+__attribute__((noinline)) void factor_rows(DelassusColumns& d, int rows) {
+  const Data& f = *d.factor;
+  const int nv = d.width[0], c0 = d.first[0];
+  const int* lam = f.v_parent.data();
+  const MatX& L = f.LD;
+  double* Z = d.Z.data();
+  const std::ptrdiff_t ld = d.Z.rows();  // column-major: Z(r, a) = Z[r + ld a]
+  for (int a = 0; a < nv; ++a) d.lo[a] = rows, d.hi[a] = 0;
+  std::uint64_t* jm = d.zmask.data();  // first the rows' non-zero columns, then their dofs
+  for (int r = 0; r < rows; ++r) {
+    jm[r] = (d.mask[r] & 1) ? nonzero_columns(d.J->row(r).data() + c0, nv) : 0;
+  }
+  for (int g0 = 0; g0 < rows;) {
+    const std::uint64_t cols = jm[g0];
+    int g1 = g0 + 1;
+    while (g1 < rows && jm[g1] == cols) ++g1;
+    const int n = g1 - g0;
+    // L^-T fills in the ancestors of a touched dof, and nothing else.
+    std::uint64_t m = cols;
+    for (std::uint64_t t = m; t;) {
+      const int a = 63 - __builtin_clzll(t);
+      t &= ~(std::uint64_t(1) << a);
+      const int p = lam[a];
+      if (p >= 0 && !(m >> p & 1)) {
+        m |= std::uint64_t(1) << p;
+        t |= std::uint64_t(1) << p;
+      }
+    }
+    // Z's block: zero off the group's dofs (they may lie in other dofs' row ranges), J on them.
+    for (int a = 0; a < nv; ++a) {
+      double* z = Z + g0 + ld * a;
+      if (!(m >> a & 1)) {
+        for (int i = 0; i < n; ++i) z[i] = 0;
+        continue;
+      }
+      for (int i = 0; i < n; ++i) z[i] = (*d.J)(g0 + i, c0 + a);
+      if (d.lo[a] == rows) d.lo[a] = g0;
+      d.hi[a] = g1;
+    }
+    // L^T Z^T = J^T over the group, the leaves first (a dof's parent has a lower index): dof k's
+    // column into all its ancestors' at once.
+    for (std::uint64_t t = m; t;) {
+      const int k = 63 - __builtin_clzll(t);
+      t &= ~(std::uint64_t(1) << k);
+      int na = 0;
+      for (int i = lam[k]; i >= 0; i = lam[i], ++na) {
+        d.ptr[na] = Z + g0 + ld * i;
+        d.coef[na] = L(k, i);
+      }
+      scatter(d.ptr.data(), d.coef.data(), Z + g0 + ld * k, na, n);
+    }
+    for (int r = g0; r < g1; ++r) jm[r] = m;
+    g0 = g1;
+  }
+}
+
+}  // namespace
+
 void delassus_begin(DelassusColumns& d, int rows) {
   d.rows = rows;
   d.formed = 0;
   std::fill(d.done.begin(), d.done.begin() + rows, 0);
+  if (d.factor) factor_rows(d, rows);
 }
 
 const double* delassus_column(DelassusColumns& d, int j) {
@@ -161,6 +409,25 @@ const double* delassus_column(DelassusColumns& d, int j) {
   w.setZero();
   for (std::uint64_t m = d.mask[j]; m; m &= m - 1) {
     const int s = __builtin_ctzll(m), c0 = d.first[s], ws = d.width[s];
+    if (s == 0 && d.factor) {
+      // W(:, j) += Z Diag^-1 Z(j, :)^T, a dof of row j at a time over the rows that touch it.
+      // The dofs that share their rows (a free base's six, a leg's joints) go together.
+      const double* dinv = d.factor->Dinv.data();
+      const double* Z = d.Z.data();
+      const std::ptrdiff_t ld = d.Z.rows();
+      for (std::uint64_t t = d.zmask[j]; t;) {
+        const int a0 = __builtin_ctzll(t), lo = d.lo[a0], hi = d.hi[a0];
+        int na = 0;
+        for (; t; t &= t - 1, ++na) {
+          const int a = __builtin_ctzll(t);
+          if (d.lo[a] != lo || d.hi[a] != hi) break;
+          d.ptr[na] = const_cast<double*>(Z + lo + ld * a);
+          d.coef[na] = Z[j + ld * a] * dinv[a];
+        }
+        gather(w.data() + lo, d.ptr.data(), d.coef.data(), na, hi - lo);
+      }
+      continue;
+    }
     // Y(s, j) = D^-1_s J(j, s)^T over the row's non-zero entries (D^-1 symmetric: its column a
     // is its row a), then W(:, j) += J(:, s) Y(s, j).
     double* ys = y.data() + c0;
@@ -179,6 +446,27 @@ const double* delassus_column(DelassusColumns& d, int j) {
 
 void delassus_complete(DelassusColumns& d) {
   for (int j = 0; j < d.rows; ++j) delassus_column(d, j);
+}
+
+void delassus_impulse_velocity(DelassusColumns& d, const VecX& p, VecX& v) {
+  const int n = d.rows;
+  // Columns after the robot's: Y's (the free bodies' blocks); the robot's through its factor.
+  const int c1 = d.factor ? d.first[0] + d.width[0] : 0;
+  for (int r = 0; r < n; ++r) {
+    if (p[r] == 0) continue;
+    delassus_column(d, r);
+    v.tail(v.size() - c1).noalias() += p[r] * d.Y->col(r).tail(v.size() - c1);
+  }
+  if (!d.factor) return;
+  // D^-1 J^T p = L^-1 Diag^-1 (Z^T p).
+  const int nv = d.width[0];
+  const double* dinv = d.factor->Dinv.data();
+  for (int a = 0; a < nv; ++a) {
+    const int lo = d.lo[a], len = d.hi[a] - lo;
+    d.g[a] = len > 0 ? dinv[a] * d.Z.col(a).segment(lo, len).dot(p.segment(lo, len)) : 0.0;
+  }
+  ltdl_solve_l(*d.factor, d.g.data());
+  v.segment(d.first[0], nv) += d.g;
 }
 
 void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,

@@ -76,6 +76,7 @@ Data::Data(const Model& model) {
 void Data::reserve_crba(const Model& model) {
   if (crba_reserved_) return;
   M = MatX::Zero(model.nv, model.nv);
+  LD = MatX::Zero(model.nv, model.nv);
   Jrow = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>::Zero(6, model.nv);
   if (Fm.cols() != model.nv) Fm = Mat6X::Zero(6, model.nv);
   crba_reserved_ = true;

@@ -78,13 +78,12 @@ SE3_KERNEL void upper_times(const Mat6& IA, const Vec6& S, Vec6& U) {
 }
 
 // D^-1 from CRBA's D (eq. 50) for small trees, where the recursion's O(n^2) column loops are
-// mostly loop overhead: D = L^T Diag L with L unit lower triangular and nonzero only at (k, i)
-// for i an ancestor dof of k (the factorization along the parent array has no fill-in,
-// Featherstone's LTDL), then Y = D^-1 row by row from L Y = Diag^-1 L^-T:
+// mostly loop overhead: D = L^T Diag L (mass_matrix_ltdl), then Y = D^-1 row by row from
+// L Y = Diag^-1 L^-T:
 //   Y(k, j) = -sum_{i anc k} L(k, i) Y(i, j)  (j < k),
 //   Y(k, k) = 1 / Diag_k - sum_{i anc k} L(k, i) Y(k, i),
-// whose right-hand sides hold only rows already done (Y symmetric). In place in Minv: L in the
-// strict lower triangle, Y's row k in the upper part of column k, then mirrored.
+// whose right-hand sides hold only rows already done (Y symmetric): Y's row k in the upper part
+// of column k of Minv, then mirrored.
 // The loops run 1 to nv times: GCC's vectorized versions (alias checks, peeling) cost more than
 // they save at these lengths.
 #if defined(__GNUC__) && !defined(__clang__)
@@ -93,36 +92,23 @@ __attribute__((optimize("no-tree-vectorize")))
 const MatX&
 minv_factor(const Model& model, Data& data, const SE3& base, const VecX& q) {
   const int nv = model.nv;
-  const MatX& M = crba(model, data, base, q);
+  const double* L = mass_matrix_ltdl(model, data, base, q).data();
   MatX& Y = data.Minv;
   double* H = Y.data();  // column-major: H[r + nv c]
   const int* lam = data.v_parent.data();
   const auto at = [nv](int r, int c) { return r + static_cast<std::ptrdiff_t>(c) * nv; };
-  for (int c = 0; c < nv; ++c) {
-    for (int r = c; r < nv; ++r) H[at(r, c)] = M(r, c);
-  }
-  // LTDL: the leaves first; row k's ancestors i update rows i's ancestor entries.
-  for (int k = nv - 1; k > 0; --k) {
-    const double dk = H[at(k, k)];
-    for (int i = lam[k]; i >= 0; i = lam[i]) {
-      const double a = H[at(k, i)] / dk;
-      for (int j = i; j >= 0; j = lam[j]) H[at(i, j)] -= a * H[at(k, j)];
-      H[at(k, i)] = a;
-    }
-  }
-  double* dinv = data.Dinv.data();
-  for (int k = 0; k < nv; ++k) dinv[k] = 1.0 / H[at(k, k)];
+  const double* dinv = data.Dinv.data();
   for (int k = 0; k < nv; ++k) {
     double* yk = H + at(0, k);  // yk[j] = Y(k, j) = Y(j, k) for j < k
     for (int j = 0; j < k; ++j) yk[j] = 0;
     for (int i = lam[k]; i >= 0; i = lam[i]) {
-      const double l = H[at(k, i)];
+      const double l = L[at(k, i)];
       const double* yi = H + at(0, i);  // Y(i, j) for j <= i: column i's upper part
       for (int j = 0; j <= i; ++j) yk[j] -= l * yi[j];
       for (int j = i + 1; j < k; ++j) yk[j] -= l * H[at(i, j)];  // Y(i, j) = Y(j, i): row i
     }
     double d = dinv[k];
-    for (int i = lam[k]; i >= 0; i = lam[i]) d -= H[at(k, i)] * yk[i];
+    for (int i = lam[k]; i >= 0; i = lam[i]) d -= L[at(k, i)] * yk[i];
     yk[k] = d;
   }
   for (int c = 0; c < nv; ++c) {

@@ -419,9 +419,15 @@ double Simulator::collide_objects() {
   CollisionModel* cm = collider();
   if (!cm) return 0;
   if (scene_collision_) {
-    forward_kinematics(*model_, diag_, state_.base, state_.q);
+    // The constraint system's forward kinematics when there is one: the step's rows reuse it.
+    const std::vector<SE3>* oMb = &diag_.oMb;
+    if (constraints_) {
+      oMb = &constraints_->body_poses(state_.base, state_.q);
+    } else {
+      forward_kinematics(*model_, diag_, state_.base, state_.q);
+    }
     for (size_t j = 0; j < bodies_.size(); ++j) free_poses_[j] = body_states_[j].base;
-    scene_frame_poses(diag_.oMb, free_poses_, frame_poses_);
+    scene_frame_poses(*oMb, free_poses_, frame_poses_);
   } else {
     for (size_t j = 0; j < bodies_.size(); ++j) {
       frame_poses_[model_->n + 1 + j] = body_states_[j].base;

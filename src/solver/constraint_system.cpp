@@ -176,6 +176,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   solver_opt_.singular_tol = opt_.singular_tol;
 
   data_.reserve_minv(model);  // minv runs inside time steps
+  fk_q_ = VecX::Zero(model.nq);
   kin_.reset(model, data_.oMb, 0);
   Vb_.assign(model.n + 1, Vec6::Zero());
   Ab_.assign(model.n + 1, Vec6::Zero());
@@ -293,6 +294,12 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   const int nsys = 1 + static_cast<int>(free_.size());
   lazy_w_.reserve(max_rows_, nsys);
   lazy_w_.width[0] = model_.nv;
+  // A row's dofs in one 64-bit mask (DelassusColumns::zmask).
+  factored_delassus_ = model_.nv > 0 && model_.nv <= 64;
+  if (factored_delassus_) {
+    lazy_w_.reserve_factored(max_rows_, model_.nv);
+    data_.reserve_crba(model_);
+  }
   for (int j = 1; j < nsys; ++j) {
     lazy_w_.first[j] = model_.nv + 6 * (j - 1);
     lazy_w_.width[j] = 6;
@@ -314,11 +321,24 @@ void ConstraintSystem::bind() {
   }
 }
 
+bool ConstraintSystem::kinematics_at(const SE3& base, const VecX& q) const {
+  return fk_current_ && base.p == fk_base_.p && base.R == fk_base_.R && q == fk_q_;
+}
+
+void ConstraintSystem::data_to(const SE3& base, const VecX& q) {
+  if (!kinematics_at(base, q)) fk_current_ = false;
+}
+
 void ConstraintSystem::kinematics(const SE3& base, const VecX& q, const VecX* v) {
   bind();
-  forward_kinematics(model_, data_, base, q);
   const Model& m = model_;
-  kin_.update_world_axes();
+  if (!kinematics_at(base, q)) {
+    forward_kinematics(model_, data_, base, q);
+    kin_.update_world_axes();
+    fk_base_ = base;
+    fk_q_ = q;
+    fk_current_ = true;
+  }
   if (!v) return;
   body_twists(m, data_, *v);
   Vb_.swap(data_.V);  // kept here: the next aba call on data_ overwrites data_.V
@@ -405,6 +425,7 @@ void ConstraintSystem::solve_multipliers(const VecX& rhs, VecX& out) {
 
 const VecX& ConstraintSystem::acceleration(const SE3& base, const VecX& q, const VecX& v,
                                            const VecX& tau) {
+  data_to(base, q);
   a_ = aba(model_, data_, base, q, v, tau);  // a_free = D^-1 (tau - H)
   if (nb_ == 0) return a_;
   kinematics(base, q, &v);
@@ -431,6 +452,7 @@ double ConstraintSystem::project(State& x) {
     fill_bilateral(false);
     err = phi_.cwiseAbs().maxCoeff();
     if (err <= opt_.projection_tol || it >= opt_.projection_iterations) break;
+    data_to(x.base, x.q);
     const MatX& Minv = minv(model_, data_, x.base, x.q);
     Yb_.noalias() = Minv * Psi_.transpose();
     Wb_.noalias() = Psi_ * Yb_;
@@ -444,6 +466,7 @@ double ConstraintSystem::project(State& x) {
     x.q.noalias() += dq_.tail(model_.n);
   }
   // Velocities: w -= D^-1 Psi^T (Psi D^-1 Psi^T)^+ Psi w (Psi_ is at the final positions).
+  data_to(x.base, x.q);
   const MatX& Minv = minv(model_, data_, x.base, x.q);
   Yb_.noalias() = Minv * Psi_.transpose();
   Wb_.noalias() = Psi_ * Yb_;
@@ -673,7 +696,18 @@ void ConstraintSystem::free_body_inverse_mass_jacobian(int rows) {
 }
 
 void ConstraintSystem::lazy_delassus(const State& x, int rows) {
-  lazy_w_.dinv[0] = row_masks(rows) ? minv(model_, data_, x.base, x.q).data() : nullptr;
+  // The robot's block through its mass matrix's factor (O(n d^2), and each column of W sums
+  // over the dofs the rows share) rather than a dense D^-1 (O(n^2), dense columns).
+  const bool robot_rows = row_masks(rows);
+  lazy_w_.factor = nullptr;
+  lazy_w_.dinv[0] = nullptr;
+  data_to(x.base, x.q);
+  if (robot_rows && factored_delassus_) {
+    mass_matrix_ltdl(model_, data_, x.base, x.q);
+    lazy_w_.factor = &data_;
+  } else if (robot_rows) {
+    lazy_w_.dinv[0] = minv(model_, data_, x.base, x.q).data();
+  }
   for (size_t j = 0; j < free_.size(); ++j) lazy_w_.dinv[j + 1] = free_[j].Minv.data();
   lazy_w_.J = &rows_.J;
   lazy_w_.Y = &Y_;
@@ -687,6 +721,7 @@ void ConstraintSystem::delassus(const State& x, int rows) {
   const int nvr = m.nv;
   auto J = rows_.J.topRows(rows);
   auto Y = Y_.leftCols(rows);
+  data_to(x.base, x.q);
   const int nsys = 1 + static_cast<int>(free_.size());
   if (nsys > 64) {  // dense (a mask per row holds 64 systems)
     const MatX& Minv = minv(m, data_, x.base, x.q);
@@ -793,11 +828,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
       st = solve_active_set(lazy_w_, c_, rows_, p_, ws_, solver_opt_);
       // v+ = v* + D^-1 J^T p over the rows with impulse (their columns of Y are formed: the
       // solver read them; delassus_column returns at once).
-      for (int r = 0; r < rows; ++r) {
-        if (p_[r] == 0) continue;
-        delassus_column(lazy_w_, r);
-        vfree_.noalias() += p_[r] * Y_.col(r);
-      }
+      delassus_impulse_velocity(lazy_w_, p_, vfree_);
     } else {
       delassus(x, rows);
       st = opt_.solver == ContactSolver::ActiveSet
@@ -895,7 +926,7 @@ void ConstraintSystem::finish_velocity_step(State& x) {
   const Model& m = model_;
   if (opt_.project && nb_ > 0) project(x);
   // Errors at the end of the step (kinematics only for what needs positions).
-  if (nb_ > 0 || spec_.ground) kinematics(x.base, x.q, nullptr);
+  if (nb_ > 0 || (spec_.ground && !contacts_.empty())) kinematics(x.base, x.q, nullptr);
   report_.penetration = 0;
   const Vec3& nrm = spec_.ground_normal;
   for (size_t k = 0; spec_.ground && k < contacts_.size(); ++k) {
