@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -513,30 +514,41 @@ TEST(Delassus, FactoredRobotBlockIsTheDenseProduct) {
   }
 }
 
-// The fused loops run four rows at a time with AVX where the machine has it, two with SSE2
-// otherwise (SE3_SIM_NO_AVX=1): both give the same bits. This binary runs itself with the
-// variable set and compares the hash of W and D^-1 J^T p it prints.
-TEST(Delassus, FactoredProductsHaveTheSameBitsOnTheSse2Path) {
-  const FactoredProblem f;
-  const std::uint64_t h = bits_hash(f.W) ^ (bits_hash(f.v) * 31);
-  if (std::getenv("SE3_SIM_NO_AVX")) {
-    std::printf("factored bits %016llx\n", static_cast<unsigned long long>(h));
-    return;
-  }
-  ASSERT_NE(g_self, nullptr);
-  const std::string cmd = std::string("SE3_SIM_NO_AVX=1 '") + g_self +
-                          "' --gtest_filter=Delassus.FactoredProductsHaveTheSameBitsOnTheSse2Path";
+// Runs this test binary's test `name` with SE3_SIM_NO_AVX=1 (the SSE2 loops) and returns the
+// number it printed after "bits " (false: none).
+bool bits_on_the_sse2_path(const std::string& name, unsigned long long& bits) {
+  if (!g_self) return false;
+  const std::string cmd =
+      std::string("SE3_SIM_NO_AVX=1 '") + g_self + "' --gtest_filter=" + name + " 2>/dev/null";
   FILE* out = popen(cmd.c_str(), "r");
-  ASSERT_NE(out, nullptr);
+  if (!out) return false;
   char line[256];
-  unsigned long long other = 0;
   bool found = false;
   while (std::fgets(line, sizeof line, out)) {
-    found = found || std::sscanf(line, "factored bits %llx", &other) == 1;
+    const char* at = std::strstr(line, "bits ");
+    found = found || (at && std::sscanf(at, "bits %llx", &bits) == 1);
   }
-  EXPECT_EQ(pclose(out), 0);
-  ASSERT_TRUE(found) << "the SSE2 run printed no hash";
-  EXPECT_EQ(other, static_cast<unsigned long long>(h));
+  return pclose(out) == 0 && found;
+}
+
+// Where the machine has AVX, loops run four lanes at a time (detail::have_avx), else SSE2's two
+// (SE3_SIM_NO_AVX=1 forces them): both must give the same bits. A test prints its result's hash
+// when run under SE3_SIM_NO_AVX and otherwise compares it with that run's.
+void expect_same_bits_on_the_sse2_path(const std::string& name, std::uint64_t h) {
+  if (std::getenv("SE3_SIM_NO_AVX")) {
+    std::printf("bits %016llx\n", static_cast<unsigned long long>(h));
+    return;
+  }
+  unsigned long long other = 0;
+  ASSERT_TRUE(bits_on_the_sse2_path(name, other)) << "the SSE2 run of " << name << " failed";
+  EXPECT_EQ(other, static_cast<unsigned long long>(h)) << name;
+}
+
+// The fused loops of the factored products (four rows at a time with AVX, two with SSE2).
+TEST(Delassus, FactoredProductsHaveTheSameBitsOnTheSse2Path) {
+  const FactoredProblem f;
+  expect_same_bits_on_the_sse2_path("Delassus.FactoredProductsHaveTheSameBitsOnTheSse2Path",
+                                    bits_hash(f.W) ^ (bits_hash(f.v) * 31));
 }
 
 namespace {
@@ -722,6 +734,21 @@ TEST(LazyDelassus, MostRowsActiveTakeTheFullProduct) {
     if (few.rows.type[r] == RowType::ContactNormal) warm[r] = 1e-6;
   }
   EXPECT_FALSE(lazy_columns_pay(few.c, few.rows, warm));
+}
+
+// The active set's LU eliminates four rows at a time with AVX when more than eight remain:
+// the four feet touching and approaching (most rows active, an 18-row system), the same
+// impulses to the bit as SSE2's loops.
+TEST(Solver, ActiveSetLuHasTheSameBitsOnTheSse2Path) {
+  const RobotContacts pb(6, 4, 7);
+  const int n = pb.rows.count;
+  SolverWorkspace ws;
+  ws.reserve(n, 0);
+  VecX p = VecX::Zero(n);
+  const SolverStats st = solve_active_set(pb.W, pb.c, pb.rows, p, ws, SolverOptions());
+  EXPECT_FALSE(st.fallback);
+  EXPECT_EQ(pb.loaded(p), 4);
+  expect_same_bits_on_the_sse2_path("Solver.ActiveSetLuHasTheSameBitsOnTheSse2Path", bits_hash(p));
 }
 
 // A foot that carries little of the load (1e-7 N s against 1e-3) can start separating (free

@@ -76,6 +76,9 @@ struct ConstraintRows {
   std::vector<int> normal;     ///< friction rows: their normal row; others kNone
   std::vector<double> mu;      ///< normal rows: Coulomb coefficient; others 0
   std::vector<double> gap;     ///< limit and normal rows: distance (< 0: penetrating)
+  /// Contact rows: bit a set for each of J's first 64 columns the builder wrote (a superset of
+  /// the non-zero ones, closed under a tree's ancestors); 0 for other rows (not known).
+  std::vector<std::uint64_t> touched;
 
   void reserve(int columns, int capacity);
   int capacity() const { return static_cast<int>(b.size()); }
@@ -118,9 +121,12 @@ struct DelassusColumns {
   MatX* Y = nullptr;                          ///< D^-1 J^T: column j valid once done[j]
   MatX* W = nullptr;                          ///< column j valid once done[j]
   const std::uint64_t* mask = nullptr;        ///< per row: the systems it touches
-  std::vector<int> first, width;              ///< per system: its columns of J
-  std::vector<const double*> dinv;            ///< per system: its block of D^-1
-  std::vector<std::uint8_t> done;             ///< per row: its columns of Y and W formed
+  /// Optional (ConstraintRows::touched): per row, its columns known to hold its non-zeros (0:
+  /// not known, J's row is scanned).
+  const std::uint64_t* touched = nullptr;
+  std::vector<int> first, width;    ///< per system: its columns of J
+  std::vector<const double*> dinv;  ///< per system: its block of D^-1
+  std::vector<std::uint8_t> done;   ///< per row: its columns of Y and W formed
   int rows = 0;
   int formed = 0;  ///< columns formed since delassus_begin
 
@@ -158,6 +164,10 @@ void delassus_impulse_velocity(DelassusColumns& d, const VecX& p, VecX& v);
 /// direction d. The one point Jacobian every builder uses. body < 0 (the world) adds nothing.
 void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const Vec3& d, double s,
                     double* row);
+/// point_jacobian along three directions into three rows at once (a contact's normal and
+/// tangents: one walk up the tree), the same sums; sets the rows' `touched` bits.
+void point_jacobian3(const SystemKinematics& sys, int body, const Vec3& p, const Vec3* const d[3],
+                     double s, ConstraintRows& rows, const int r[3]);
 /// row[col0 + k] += s c . w_k: the body's world angular velocity along c.
 void angular_jacobian(const SystemKinematics& sys, int body, const Vec3& c, double s, double* row);
 

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+
+#include "../lie/simd.h"
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
@@ -144,13 +146,7 @@ void halfspace_candidates(const CollisionObject& o, const SE3& T, const Vec3& n,
 // Two candidates at a time where SSE2 is there, with the same operations in each lane as the
 // scalar loop (no fused multiply-add), so both give the same bits.
 #ifdef SE3_COLLISION_AVX
-// Whether the CPU has AVX (the four-lane loops below; separate multiplies and adds, no fused
-// multiply-add, so every lane computes what the scalar and SSE2 loops compute, to the bit).
-// SE3_SIM_NO_AVX set in the environment keeps the SSE2 loops (to test them on an AVX machine).
-bool have_avx() {
-  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("SE3_SIM_NO_AVX");
-  return avx;
-}
+using detail::have_avx;  // the four-lane loops below (lie/simd.h)
 
 // nearest_picked's loop four candidates at a time (k from 0, while k + 4 <= n); returns the
 // largest d[k] of those, and the count done in done.

@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "../lie/simd.h"
 #include "se3_sim/constraint.h"
 
 namespace se3 {
@@ -44,6 +45,7 @@ void ConstraintRows::reserve(int columns, int cap) {
   normal.assign(cap, kNone);
   mu.assign(cap, 0.0);
   gap.assign(cap, 0.0);
+  touched.assign(cap, 0);
 }
 
 int ConstraintRows::add(RowType t, int producer) {
@@ -56,6 +58,7 @@ int ConstraintRows::add(RowType t, int producer) {
   friction[r] = friction2[r] = normal[r] = kNone;
   mu[r] = 0;
   gap[r] = 0;
+  touched[r] = 0;
   return r;
 }
 
@@ -209,14 +212,10 @@ void scatter_fixed(double* const* z, const double* c, const double* src, int n) 
   }
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
+#ifdef SE3_SIM_RUNTIME_AVX
 #define SE3_ROWS_AVX 1
 // The same loops four rows at a time (AVX, no FMA: the same products and sums, the same bits),
-// chosen at run time; SE3_SIM_NO_AVX set in the environment keeps the SSE2 ones.
-bool rows_use_avx() {
-  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("SE3_SIM_NO_AVX");
-  return avx;
-}
+// chosen at run time (detail::have_avx).
 
 template <int M>
 __attribute__((target("avx"))) void gather_fixed_avx(double* out, const double* const* z,
@@ -287,7 +286,7 @@ __attribute__((target("avx"))) void scatter_fixed_avx(double* const* z, const do
 
 void gather(double* out, const double* const* z, const double* c, int m, int n) {
 #ifdef SE3_ROWS_AVX
-  if (rows_use_avx()) {
+  if (detail::have_avx()) {
     for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
       SE3_FUSED_SWITCH(gather_fixed_avx, out, z, c, n)
     }
@@ -301,7 +300,7 @@ void gather(double* out, const double* const* z, const double* c, int m, int n) 
 
 void scatter(double* const* z, const double* c, const double* src, int m, int n) {
 #ifdef SE3_ROWS_AVX
-  if (rows_use_avx()) {
+  if (detail::have_avx()) {
     for (; m > 0; m -= kFuse, z += kFuse, c += kFuse) {
       SE3_FUSED_SWITCH(scatter_fixed_avx, z, c, src, n)
     }
@@ -342,8 +341,15 @@ __attribute__((noinline)) void factor_rows(DelassusColumns& d, int rows) {
   const std::ptrdiff_t ld = d.Z.rows();  // column-major: Z(r, a) = Z[r + ld a]
   for (int a = 0; a < nv; ++a) d.lo[a] = rows, d.hi[a] = 0;
   std::uint64_t* jm = d.zmask.data();  // first the rows' non-zero columns, then their dofs
+  const std::uint64_t robot = nv == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << nv) - 1;
   for (int r = 0; r < rows; ++r) {
-    jm[r] = (d.mask[r] & 1) ? nonzero_columns(d.J->row(r).data() + c0, nv) : 0;
+    if (!(d.mask[r] & 1)) {
+      jm[r] = 0;
+    } else if (d.touched && d.touched[r] && c0 == 0) {
+      jm[r] = d.touched[r] & robot;  // the columns the builder wrote (closed: its ancestors)
+    } else {
+      jm[r] = nonzero_columns(d.J->row(r).data() + c0, nv);
+    }
   }
   for (int g0 = 0; g0 < rows;) {
     const std::uint64_t cols = jm[g0];
@@ -485,6 +491,27 @@ void point_jacobian(const SystemKinematics& sys, int body, const Vec3& p, const 
   }
 }
 
+void point_jacobian3(const SystemKinematics& sys, int body, const Vec3& p, const Vec3* const d[3],
+                     double s, ConstraintRows& rows, const int r[3]) {
+  if (body < 0 || !sys.model) return;
+  const Model& m = *sys.model;
+  const Vec3 pxd[3] = {p.cross(*d[0]), p.cross(*d[1]), p.cross(*d[2])};
+  double* out[3] = {rows.row(r[0]) + sys.col0, rows.row(r[1]) + sys.col0,
+                    rows.row(r[2]) + sys.col0};
+  std::uint64_t bits = 0;
+  auto add = [&](int col) {
+    const Vec6& S = sys.Sw[col];
+    for (int k = 0; k < 3; ++k)
+      out[k][col] += s * (d[k]->dot(S.tail<3>()) + pxd[k].dot(S.head<3>()));
+    if (sys.col0 + col < 64) bits |= std::uint64_t(1) << (sys.col0 + col);
+  };
+  for (int j = body; j >= 1; j = m.parent[j]) add(m.idx_v(j));
+  if (m.floating) {
+    for (int k = 0; k < 6; ++k) add(k);
+  }
+  for (int k = 0; k < 3; ++k) rows.touched[r[k]] |= bits;
+}
+
 void angular_jacobian(const SystemKinematics& sys, int body, const Vec3& c, double s, double* row) {
   if (body < 0 || !sys.model) return;
   const Model& m = *sys.model;
@@ -574,10 +601,8 @@ void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts
     const int f2 = rows.add(RowType::ContactFriction, static_cast<int>(k));
     const Vec3* dirs[3] = {&c.normal, &t1, &t2};
     const int r3[3] = {n, f1, f2};
-    for (int j = 0; j < 3; ++j) {
-      if (sb) point_jacobian(*sb, fb.body, c.point, *dirs[j], 1.0, rows.row(r3[j]));
-      if (sa) point_jacobian(*sa, fa.body, c.point, *dirs[j], -1.0, rows.row(r3[j]));
-    }
+    if (sb) point_jacobian3(*sb, fb.body, c.point, dirs, 1.0, rows, r3);
+    if (sa) point_jacobian3(*sa, fa.body, c.point, dirs, -1.0, rows, r3);
     rows.friction[n] = f1;
     rows.friction2[n] = f2;
     rows.normal[f1] = rows.normal[f2] = n;

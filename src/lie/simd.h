@@ -6,6 +6,7 @@
 // (docs/performance.md). Internal header.
 #pragma once
 
+#include <cstdlib>
 #include <cstring>
 
 namespace se3 {
@@ -115,6 +116,18 @@ inline void add_terms(int n, const double* x, int T, const double* c, const doub
     }
   }
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define SE3_SIM_RUNTIME_AVX 1
+// Whether the four-lane AVX loops (chosen at run time, compiled with target("avx")) may run: the
+// CPU has AVX and SE3_SIM_NO_AVX is not set in the environment (which keeps the SSE2 loops, to
+// test them on an AVX machine). Those loops multiply and add separately (no fused
+// multiply-add): each lane computes what the scalar and SSE2 loops compute, to the bit.
+inline bool have_avx() {
+  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("SE3_SIM_NO_AVX");
+  return avx;
+}
+#endif
 
 }  // namespace detail
 }  // namespace se3

@@ -713,6 +713,7 @@ void ConstraintSystem::lazy_delassus(const State& x, int rows) {
   lazy_w_.Y = &Y_;
   lazy_w_.W = &W_;
   lazy_w_.mask = row_mask_.data();
+  lazy_w_.touched = rows_.touched.data();
   delassus_begin(lazy_w_, rows);
 }
 

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "../lie/simd.h"
 #include "se3_sim/solver.h"
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#endif
 
 namespace se3 {
 
@@ -23,6 +27,26 @@ bool unilateral(RowType t) {
 // Solves the m x m system in the top-left of A for x (rhs in, solution out) by LU with partial
 // pivoting, in place. Returns false for a (numerically) singular system. Column-oriented (A is
 // column-major with the workspace's capacity as its stride): every inner loop runs down a column.
+#ifdef SE3_SIM_RUNTIME_AVX
+// The elimination of column k from the columns right of it (rows below k), four rows at a time:
+// the scalar loop's products and differences, so the same bits.
+__attribute__((target("avx"))) void eliminate_avx(MatX& A, int k, int m) {
+  const double* ck = &A(0, k);
+  for (int j = k + 1; j < m; ++j) {
+    double* cj = &A(0, j);
+    const double akj = cj[k];
+    if (akj == 0) continue;
+    const __m256d a = _mm256_set1_pd(akj);
+    int i = k + 1;
+    for (; i + 4 <= m; i += 4) {
+      _mm256_storeu_pd(cj + i, _mm256_sub_pd(_mm256_loadu_pd(cj + i),
+                                             _mm256_mul_pd(_mm256_loadu_pd(ck + i), a)));
+    }
+    for (; i < m; ++i) cj[i] -= ck[i] * akj;
+  }
+}
+#endif
+
 bool lu_solve(MatX& A, int m, std::vector<int>& piv, VecX& x) {
   for (int k = 0; k < m; ++k) {
     double* ck = &A(0, k);
@@ -42,6 +66,12 @@ bool lu_solve(MatX& A, int m, std::vector<int>& piv, VecX& x) {
       ck[i] *= inv;
       x[i] -= ck[i] * x[k];
     }
+#ifdef SE3_SIM_RUNTIME_AVX
+    if (m - k > 8 && detail::have_avx()) {
+      eliminate_avx(A, k, m);
+      continue;
+    }
+#endif
     for (int j = k + 1; j < m; ++j) {
       double* cj = &A(0, j);
       const double akj = cj[k];
