@@ -8,22 +8,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "same_bits.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
-
-namespace {
-const char* g_self = nullptr;  // this test binary (main)
-}  // namespace
 
 using namespace se3;
 
@@ -401,48 +395,26 @@ TEST(Contact, AnotherIntegratorKeepsItsStepsAwayFromContact) {
 // runs give the same bits. This binary runs itself with the variable set and compares a hash of
 // the robot's and the objects' final states over 0.6 s of three scenes.
 TEST(Contact, ScenesStepTheSameBitsOnTheSse2Path) {
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const double* x, std::size_t n) {
-    const auto* b = reinterpret_cast<const unsigned char*>(x);
-    for (std::size_t k = 0; k < n * sizeof(double); ++k) h = (h ^ b[k]) * 1099511628211ull;
-  };
+  se3_test::BitsHash h;
   for (const char* name : {"solo12_meshes", "box_stack", "panda_push"}) {
     auto sim = make_simulator(load_scene(kScenes + name + ".yaml"));
     ASSERT_EQ(sim->step_n(600), 600) << name << ": " << sim->failure();
     const State& x = sim->state();
-    mix(x.q.data(), static_cast<std::size_t>(x.q.size()));
-    mix(x.v.data(), static_cast<std::size_t>(x.v.size()));
-    mix(x.base.R.data(), 9);
-    mix(x.base.p.data(), 3);
+    h.add(x.q);
+    h.add(x.v);
+    h.add(x.base.R);
+    h.add(x.base.p);
     for (const ObjectState& o : sim->objects()) {
-      mix(o.pose.p.data(), 3);
-      mix(o.twist.data(), 6);
+      h.add(o.pose.p);
+      h.add(o.twist);
     }
     EXPECT_GT(sim->contacts().size(), 0u) << name << ": no contact to compare";
   }
-  if (std::getenv("SE3_SIM_NO_AVX")) {
-    std::printf("bits %016llx\n", static_cast<unsigned long long>(h));
-    return;
-  }
-  ASSERT_NE(g_self, nullptr);
-  const std::string cmd = std::string("SE3_SIM_NO_AVX=1 '") + g_self +
-                          "' --gtest_filter=Contact.ScenesStepTheSameBitsOnTheSse2Path 2>/dev/null";
-  FILE* out = popen(cmd.c_str(), "r");
-  ASSERT_NE(out, nullptr);
-  char line[256];
-  unsigned long long other = 0;
-  bool found = false;
-  while (std::fgets(line, sizeof line, out)) {
-    const char* at = std::strstr(line, "bits ");
-    found = found || (at && std::sscanf(at, "bits %llx", &other) == 1);
-  }
-  EXPECT_EQ(pclose(out), 0);
-  ASSERT_TRUE(found) << "the SSE2 run printed no hash";
-  EXPECT_EQ(other, static_cast<unsigned long long>(h));
+  se3_test::expect_same_bits_on_the_sse2_path("Contact.ScenesStepTheSameBitsOnTheSse2Path", h.h);
 }
 
 int main(int argc, char** argv) {
-  g_self = argv[0];
+  se3_test::self() = argv[0];
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }

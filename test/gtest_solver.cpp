@@ -14,21 +14,16 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "same_bits.h"
 #include "se3_sim/constraint.h"
 #include "se3_sim/solver.h"
 #include "test_util.h"
-
-namespace {
-const char* g_self = nullptr;  // this test binary (main)
-}  // namespace
 
 using namespace se3;
 
@@ -308,10 +303,32 @@ TEST(Solver, StackOfThreeIsSoftUnderFewPgsSweepsAndExactUnderTheActiveSet) {
 }
 
 int main(int argc, char** argv) {
-  g_self = argv[0];
+  se3_test::self() = argv[0];
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+namespace {
+
+// Solo12 (free base) at a random state drawn from rng, its kinematics ready for the row builders.
+struct Solo12At {
+  Model m;
+  se3_test::RandomState s;
+  Data data;
+  SystemKinematics kin;
+  explicit Solo12At(std::mt19937_64& rng) : m(load()), s(se3_test::random_state(m, rng)), data(m) {
+    forward_kinematics(m, data, s.base, s.q);
+    kin.reset(m, data.oMb, 0);
+    kin.update_world_axes();
+  }
+  static Model load() {
+    UrdfOptions opt;
+    opt.floating = true;
+    return model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
+  }
+};
+
+}  // namespace
 
 // The robot's block of the Delassus matrix, summed over each row's non-zero columns only
 // (robot_delassus), equals the dense products D^-1 J^T and J D^-1 J^T up to rounding: solo12
@@ -319,17 +336,13 @@ int main(int argc, char** argv) {
 // and a row that touches only a free body's columns. Every non-zero entry of J carries weight
 // in W, so a column left out of a row's sum shows far above the tolerance.
 TEST(Delassus, RobotBlockIsTheDenseProductWithContactsOnEveryLink) {
-  UrdfOptions opt;
-  opt.floating = true;
-  const Model m = model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
-  ASSERT_EQ(m.nv, 18);
   std::mt19937_64 rng(14);
-  const se3_test::RandomState s = se3_test::random_state(m, rng);
-  Data data(m);
-  forward_kinematics(m, data, s.base, s.q);
-  SystemKinematics kin;
-  kin.reset(m, data.oMb, 0);
-  kin.update_world_axes();
+  Solo12At solo(rng);
+  const Model& m = solo.m;
+  const se3_test::RandomState& s = solo.s;
+  Data& data = solo.data;
+  const SystemKinematics& kin = solo.kin;
+  ASSERT_EQ(m.nv, 18);
 
   const int nv = m.nv + 6;  // the robot, then a free body's six columns
   ConstraintRows rows;
@@ -405,16 +418,12 @@ struct FactoredProblem {
   VecX v, vd;
   double cond = 0;  // of the robot's D: the two routes to D^-1 differ by rounding times this
   FactoredProblem() {
-    UrdfOptions opt;
-    opt.floating = true;
-    const Model m = model_from_urdf_file(se3_test::robot_path("solo12.urdf"), opt);
     std::mt19937_64 rng(19);
-    const se3_test::RandomState s = se3_test::random_state(m, rng);
-    Data data(m);
-    forward_kinematics(m, data, s.base, s.q);
-    SystemKinematics kin;
-    kin.reset(m, data.oMb, 0);
-    kin.update_world_axes();
+    Solo12At solo(rng);
+    const Model& m = solo.m;
+    const se3_test::RandomState& s = solo.s;
+    Data& data = solo.data;
+    const SystemKinematics& kin = solo.kin;
     const int nv = m.nv + 6;
     ConstraintRows rows;
     rows.reserve(nv, 3 * (m.n + 1) + 20 + 5);
@@ -490,17 +499,6 @@ struct FactoredProblem {
   }
 };
 
-// The bits of a matrix, as one number (FNV-1a over its bytes).
-template <class M>
-std::uint64_t bits_hash(const M& a) {
-  std::uint64_t h = 1469598103934665603ull;
-  const auto* b = reinterpret_cast<const unsigned char*>(a.data());
-  for (std::size_t k = 0; k < sizeof(double) * static_cast<std::size_t>(a.size()); ++k) {
-    h = (h ^ b[k]) * 1099511628211ull;
-  }
-  return h;
-}
-
 }  // namespace
 
 // The robot's block by its mass matrix's factor (DelassusColumns::factor: Z = J L^-T, each
@@ -526,41 +524,14 @@ TEST(Delassus, FactoredRobotBlockIsTheDenseProduct) {
   }
 }
 
-// Runs this test binary's test `name` with SE3_SIM_NO_AVX=1 (the SSE2 loops) and returns the
-// number it printed after "bits " (false: none).
-bool bits_on_the_sse2_path(const std::string& name, unsigned long long& bits) {
-  if (!g_self) return false;
-  const std::string cmd =
-      std::string("SE3_SIM_NO_AVX=1 '") + g_self + "' --gtest_filter=" + name + " 2>/dev/null";
-  FILE* out = popen(cmd.c_str(), "r");
-  if (!out) return false;
-  char line[256];
-  bool found = false;
-  while (std::fgets(line, sizeof line, out)) {
-    const char* at = std::strstr(line, "bits ");
-    found = found || (at && std::sscanf(at, "bits %llx", &bits) == 1);
-  }
-  return pclose(out) == 0 && found;
-}
-
-// Where the machine has AVX, loops run four lanes at a time (detail::have_avx), else SSE2's two
-// (SE3_SIM_NO_AVX=1 forces them): both must give the same bits. A test prints its result's hash
-// when run under SE3_SIM_NO_AVX and otherwise compares it with that run's.
-void expect_same_bits_on_the_sse2_path(const std::string& name, std::uint64_t h) {
-  if (std::getenv("SE3_SIM_NO_AVX")) {
-    std::printf("bits %016llx\n", static_cast<unsigned long long>(h));
-    return;
-  }
-  unsigned long long other = 0;
-  ASSERT_TRUE(bits_on_the_sse2_path(name, other)) << "the SSE2 run of " << name << " failed";
-  EXPECT_EQ(other, static_cast<unsigned long long>(h)) << name;
-}
-
 // The fused loops of the factored products (four rows at a time with AVX, two with SSE2).
 TEST(Delassus, FactoredProductsHaveTheSameBitsOnTheSse2Path) {
   const FactoredProblem f;
-  expect_same_bits_on_the_sse2_path("Delassus.FactoredProductsHaveTheSameBitsOnTheSse2Path",
-                                    bits_hash(f.W) ^ (bits_hash(f.v) * 31));
+  se3_test::BitsHash h;
+  h.add(f.W);
+  h.add(f.v);
+  se3_test::expect_same_bits_on_the_sse2_path(
+      "Delassus.FactoredProductsHaveTheSameBitsOnTheSse2Path", h.h);
 }
 
 namespace {
@@ -760,7 +731,9 @@ TEST(Solver, ActiveSetLuHasTheSameBitsOnTheSse2Path) {
   const SolverStats st = solve_active_set(pb.W, pb.c, pb.rows, p, ws, SolverOptions());
   EXPECT_FALSE(st.fallback);
   EXPECT_EQ(pb.loaded(p), 4);
-  expect_same_bits_on_the_sse2_path("Solver.ActiveSetLuHasTheSameBitsOnTheSse2Path", bits_hash(p));
+  se3_test::BitsHash h;
+  h.add(p);
+  se3_test::expect_same_bits_on_the_sse2_path("Solver.ActiveSetLuHasTheSameBitsOnTheSse2Path", h.h);
 }
 
 // A foot that carries little of the load (1e-7 N s against 1e-3) can start separating (free

@@ -227,13 +227,13 @@ class ConstraintSystem final : public AccelerationHook {
   /// excursion (rad or m), whichever is largest.
   double error(const State& x);
 
-  /// Forces of the last step, one per constraint / limit / contact point (world frame).
   /// The robot's body poses (world) at (base, q): the forward kinematics the next velocity
   /// step's rows reuse when it starts at the same configuration.
   const std::vector<SE3>& body_poses(const SE3& base, const VecX& q) {
     kinematics(base, q, nullptr);
     return data_.oMb;
   }
+  /// Forces of the last step, one per constraint / limit / contact point (world frame).
   const std::vector<ConstraintForce>& forces() const { return forces_; }
   const ConstraintReport& report() const { return report_; }
 

@@ -827,8 +827,8 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     if (lazy) {
       lazy_delassus(x, rows);
       st = solve_active_set(lazy_w_, c_, rows_, p_, ws_, solver_opt_);
-      // v+ = v* + D^-1 J^T p over the rows with impulse (their columns of Y are formed: the
-      // solver read them; delassus_column returns at once).
+      // v+ = v* + D^-1 J^T p over the rows with impulse (the robot's part through its factor,
+      // the free bodies' through the columns of Y the solver formed).
       delassus_impulse_velocity(lazy_w_, p_, vfree_);
     } else {
       delassus(x, rows);
