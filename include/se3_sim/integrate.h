@@ -83,6 +83,13 @@ struct StepInfo {
   int evaluations = 0;  ///< dynamics (ABA) calls
   int substeps = 0;     ///< accepted internal steps (1 for fixed-step methods)
   int rejected = 0;     ///< rejected internal steps (adaptive only)
+  /// Whether the step (or part of it) was taken by the velocity-level contact scheme
+  /// (contact_semi_implicit) rather than by the stepper's own method: constrained_step sets it
+  /// when a limit or contact was within reach. Reports count steps by the scheme that took them.
+  bool velocity_level = false;
+  /// Impacts located inside the step and applied as impulses (joint limits struck under an
+  /// integrator other than the contact scheme: constrained_step).
+  int events = 0;
   std::string reason;   ///< why the step failed (ok == false); the state is then unchanged
 };
 

@@ -51,6 +51,7 @@ class ContactSemiImplicitStepper final : public Stepper {
     StepInfo info;
     info.evaluations = 1;
     info.substeps = 1;
+    info.velocity_level = true;
     return info;
   }
 };
@@ -107,6 +108,7 @@ StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State
   StepInfo info;
   info.evaluations = 1;
   info.substeps = 1;
+  info.velocity_level = true;
   if (!constraints.velocity_step(x, a_free, h, in)) {
     info.ok = false;
     info.reason = "constraint solve produced a non-finite state";
