@@ -43,6 +43,7 @@ struct RowParams {
   double bilateral_erp = 0.2;  ///< bilateral rows: b = -bilateral_erp phi / h
   double margin = 0.01;        ///< m or rad: limits closer than this (plus |rate| h) get a row
   double restitution_velocity = 0.2;  ///< m/s: slower impacts do not bounce (resting contact)
+  double limit_restitution = 0;       ///< of the joint limits: J v+ >= -e J v on an impact
 };
 
 /// One system's kinematics for Jacobian rows: body poses and the world axis of every velocity

@@ -99,7 +99,10 @@ struct ConstraintOptions {
   double margin = 0.01;    ///< m or rad: rows of gaps below this (plus |rate| h) enter the solve
   double bilateral_erp = 0.2;         ///< velocity-level bilateral rows: b = -bilateral_erp phi / h
   double restitution = 0;             ///< of the ground and the contact spheres (the larger counts)
-  double restitution_velocity = 0.2;  ///< m/s: slower impacts do not bounce
+  double restitution_velocity = 0.2;  ///< m/s (rad/s): slower impacts do not bounce
+  /// Of the joint limits: an impact faster than restitution_velocity leaves at e times its speed
+  /// (the velocity-level rows, and the located impacts of another integrator).
+  double limit_restitution = 0;
   ContactSolver solver = ContactSolver::PGS;  ///< pgs or active_set (solver.h)
 };
 

@@ -158,6 +158,13 @@ const MatX& minv(const Model& model, Data& data, const SE3& base, const VecX& q)
 /// H(q, v, g) with D vdot + H = tau (note: the paper's eq. (30) writes +H on the right).
 const VecX& bias(const Model& model, Data& data, const SE3& base, const VecX& q, const VecX& v);
 
+/// The base rows of D, [D_00 D_0q] (6 x nv, base frame): the map from v to the momentum of the
+/// whole tree about the base frame, P_0 = D_0 v; D_00 is the tree's composite inertia (eq. 50 at
+/// the root). O(n) by composite inertias in the base frame (src/dynamics/momentum.cpp). Zero
+/// for a fixed base. Allocates only when D0 has another size.
+using Mat6N = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+void base_momentum_map(const Model& model, Data& data, const VecX& q, Mat6N& D0);
+
 /// Kinetic energy 1/2 v^T D v, computed recursively (needs no mass matrix).
 double kinetic_energy(const Model& model, Data& data, const SE3& base, const VecX& q,
                       const VecX& v);

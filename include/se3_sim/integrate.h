@@ -19,6 +19,7 @@
 // model: step() allocates nothing. The model must outlive the stepper.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <functional>
 #include <memory>
 #include <string>
@@ -90,7 +91,79 @@ struct StepInfo {
   /// Impacts located inside the step and applied as impulses (joint limits struck under an
   /// integrator other than the contact scheme: constrained_step).
   int events = 0;
-  std::string reason;   ///< why the step failed (ok == false); the state is then unchanged
+  std::string reason;  ///< why the step failed (ok == false); the state is then unchanged
+};
+
+/// The free base of the velocity-level step (contact_semi_implicit, semi_implicit_euler and the
+/// contact scheme's steps of any stepper), written so that the world momentum of a free-floating
+/// tree changes by the external impulses only (gravity, the applied base wrench, ground and
+/// objects), to rounding, whatever its joint torques, limits and self-contacts do; a single free
+/// body's flight is the world-frame semi-implicit Euler step (exact in zero gravity). With D_0 =
+/// [D_00 D_0q] the base rows of D (base_momentum_map) and V0 = [w; u] (docs/design.md, "The
+/// velocity-level step"):
+///   (V1) a_0 = [0; R^T g] + D_00^-1 (F_0 - D_0q a_q)   the free velocity's base part,
+///   (V2) f+ = f E, E = (exp(h w), h u)                 the pose with the new rates,
+///   (V3) D_0(q+) v+ = Ad*_E^T D_0(q) v                 the base twist re-expressed.
+/// For a fixed base it is the plain semi-implicit Euler step. Sized once; allocates nothing.
+class FreeBaseStep {
+ public:
+  explicit FreeBaseStep(const Model& model);
+  /// a (ABA's, nv) with its base part replaced by (V1); tau is the generalized force whose first
+  /// six entries are the applied base wrench F_0. When a holds constraint forces (an
+  /// acceleration hook), a_unconstrained is ABA's acceleration without them: their base wrench
+  /// then counts as external. Returns a copy held here.
+  const VecX& free_acceleration(Data& data, const State& x, const VecX& tau, const VecX& a,
+                                const VecX* a_unconstrained = nullptr);
+  /// With x.v the step's final rates at the step's first configuration: the positions (V2,
+  /// q <- q + h qdot) and the base twist re-expressed (V3). data is a workspace.
+  void advance(Data& data, State& x, double h);
+
+ private:
+  bool map_at(const VecX& q) const;
+  /// D0_ and its base block's Cholesky factor at q (kept while q does not change).
+  void map(Data& data, const VecX& q);
+  const Model& model_;
+  Mat6N D0_;
+  Eigen::LLT<Mat6> llt_;
+  VecX q_at_;
+  bool valid_ = false;
+  VecX a_;
+  VecX d_;
+};
+
+/// (V2): f <- f E with E = (exp(h w), h u) for the twist V = [w; u] (the rotation in the body
+/// frame, the translation along the body-frame velocity taken in the step's first frame);
+/// returns E. The velocity-level step's pose update of a robot's base and of a scene object.
+SE3 advance_free_pose(SE3& f, const Vec6& V, double h);
+/// A momentum (wrench-like, [angular; linear]) about the frame of the step's start expressed about
+/// the new frame f E: Ad*_E^T P.
+Vec6 reexpress_momentum(const SE3& E, const Vec6& P);
+
+/// Joint limits under an integrator other than the contact scheme (constrained_step, scenes
+/// whose only unilateral constraints are the robot's joint limits): the integrator's own steps
+/// between impacts; an impact is located inside the step (regula falsi on the step length, until
+/// the deepest limit's gap is within [-gap_tol, 0]) and applied there as an impulse through the
+/// full D^-1, J v+ = -e J v- on the limits struck (e = restitution above restitution_velocity,
+/// else 0; impulses >= 0), then the step goes on from that instant. A joint resting on its limit
+/// (within rest_gap and not separating) takes the contact scheme's step instead.
+struct LimitEventOptions {
+  double gap_tol = 1e-12;             ///< rad or m: an impact is located to this gap
+  double time_tol = 1e-14;            ///< s: or to this bracket of the step length
+  int max_iterations = 60;            ///< regula falsi iterations per impact
+  int max_events = 8;                 ///< impacts per step; beyond, the contact scheme's step
+  double rest_gap = 1e-6;             ///< rad or m: a limit this close counts as touching
+  double rest_speed = 1e-6;           ///< rad/s or m/s: a touching limit slower than this rests
+  double restitution = 0;             ///< of the limits
+  double restitution_velocity = 0.2;  ///< slower impacts do not bounce
+};
+
+/// The workspace of the limit events (sized once for a model: a step allocates nothing).
+struct LimitEventWorkspace {
+  explicit LimitEventWorkspace(const Model& model);
+  State x0, x1;           ///< the sub-step's start and trial states
+  std::vector<int> rows;  ///< struck limits: +(i) lower, -(i) upper
+  MatX W;                 ///< J D^-1 J^T of the struck limits
+  VecX rhs, lambda, dv;
 };
 
 class Stepper {
@@ -129,14 +202,24 @@ class Stepper {
   /// by constrained_step (below).
   void set_acceleration_hook(AccelerationHook* hook) { hook_ = hook; }
   AccelerationHook* acceleration_hook() const { return hook_; }
+  /// The free base's velocity-level step (FreeBaseStep) for this model, with its workspace.
+  FreeBaseStep& free_base() { return free_base_; }
+  /// The workspace of located joint-limit impacts (constrained_step), made on first use.
+  LimitEventWorkspace& limit_events();
 
  protected:
+  /// The semi-implicit Euler step of the velocity-level scheme: v += h a with the free base's
+  /// part by FreeBaseStep (V1), then the positions and the base twist (V2, V3).
+  StepInfo velocity_level_step(State& x, const VecX& tau_cmd, double h);
+
   const Model& model_;
   StepperOptions opt_;
   Data data_;
   VecX tau_;  ///< total generalized force of the current evaluation
   AccelerationHook* hook_ = nullptr;
   PassiveForces passive_;  ///< nothing when opt_.passive_forces is off
+  FreeBaseStep free_base_;
+  std::unique_ptr<LimitEventWorkspace> limit_events_;
 };
 
 /// The stepper registry: the one list of integrators (the CLI, its help text, scenes and the
@@ -197,18 +280,15 @@ inline constexpr const char* kContactStepper = "contact_semi_implicit";
 /// Whether a stepper name is the contact scheme, or semi_implicit_euler (the same scheme
 /// without constraints, kept as a contact scene's integrator for older scenes).
 bool is_contact_scheme(const std::string& name);
-/// The position half of the semi-implicit Euler step on SE(3) with x.v as it stands:
-/// f <- f exp(h V0) (kept orthonormal), q <- q + h qdot.
-void advance_positions_semi_implicit(const Model& model, State& x, double h);
 
 /// A free body of a contact step (a scene object: Model n = 0, floating, its frame at its centre
-/// of mass). Its free velocity over h is taken in the frame of the step's start, where without
-/// torque the body-frame momentum does not change: V* = V + h [0; R^T g] (a = [0; R^T g]).
+/// of mass): FreeBaseStep's (V1) for a tree of one body without applied wrench, a = [0; R^T g]
+/// (its free velocity taken in the frame of the step's start, where without torque the
+/// momentum does not change).
 void free_body_acceleration(const Model& body, const State& x, VecX& a);
-/// After the impulses: R <- R E, E = exp(h w), p <- p + h R v, and the twist re-expressed in the
-/// new frame (v <- E^T v, w <- I^-1 E^T I w), so that in flight the world momentum m R v and
-/// angular momentum R I w stay exactly what they were (free objects keep their momentum
-/// between impacts; the body-frame semi-implicit Euler step would not).
+/// After the impulses: FreeBaseStep's (V2) and (V3) for one body, the pose by
+/// advance_free_pose and the twist re-expressed in the new frame, V <- J^-1 Ad*_E^T J V, so that
+/// in flight the world momentum stays exactly what it was.
 void advance_free_body(const Model& body, State& x, double h);
 
 /// The free bodies of a contact step beside the robot (scene objects) and contacts from
@@ -226,7 +306,7 @@ struct ContactBodies {
 /// is its acceleration hook for the step) and the system then projects the state and records
 /// the forces. With joint limits, contact or free bodies the step is the contact scheme: the
 /// free velocity from ABA (with the passive forces), the impulses (ConstraintSystem::
-/// velocity_step), the positions with the new velocities (advance_positions_semi_implicit),
+/// velocity_step), the positions with the new velocities and the base twist (FreeBaseStep),
 /// then ConstraintSystem::finish_velocity_step. A stepper other than the contact scheme
 /// (is_contact_scheme) keeps its own steps while no limit or contact is within reach: the
 /// steps that have one are the contact scheme's (first order), documented in docs/contact.md.

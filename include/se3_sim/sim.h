@@ -303,6 +303,14 @@ class Simulator {
   std::uint64_t substeps() const { return substeps_; }
   std::uint64_t rejected() const { return rejected_; }
   std::uint64_t evaluations() const { return evaluations_; }
+  /// Steps since reset taken (wholly or in part) by the velocity-level contact scheme, and the
+  /// joint-limit impacts located inside steps (StepInfo); steps() - velocity_level_steps() were
+  /// the integrator's own.
+  std::uint64_t velocity_level_steps() const { return velocity_level_steps_; }
+  std::uint64_t events() const { return events_; }
+  /// The schemes that took the steps since reset: the integrator's name, the contact scheme's,
+  /// or both as "A+B" (the integrator first); the integrator's name before the first step.
+  std::string schemes_used() const;
 
   // ---- diagnostics (own workspace; not the stepper's)
   double kinetic_energy();
@@ -310,6 +318,11 @@ class Simulator {
   double potential_energy();
   /// Total spatial momentum, world frame.
   Vec6 momentum();
+  /// The whole scene's: the robot's with every free object's kinetic energy, potential energy
+  /// (from the initial configuration and the objects' initial poses) and world momentum.
+  double scene_kinetic_energy();
+  double scene_potential_energy();
+  Vec6 scene_momentum();
   Vec3 center_of_mass();
   /// Initial kinetic energy (after the last reset).
   double initial_kinetic_energy() const { return T0_; }
@@ -394,6 +407,7 @@ class Simulator {
   double command_timeout_ = std::numeric_limits<double>::infinity();
   double time_ = 0, last_checked_time_ = 0;
   std::uint64_t steps_ = 0, substeps_ = 0, rejected_ = 0, evaluations_ = 0;
+  std::uint64_t velocity_level_steps_ = 0, events_ = 0;
   std::uint64_t last_checked_steps_ = 0;
   int steps_to_energy_check_ = 1;  ///< the energy is checked on the step that takes it to 0
   std::string failure_;
@@ -466,6 +480,9 @@ struct SimulateResult {
   /// base and zero gravity; else NaN): the centre of mass moves uniformly.
   double com_drift_max = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t substeps = 0, rejected = 0, evaluations = 0;
+  /// Steps taken by the contact scheme (the rest by the integrator), and joint-limit impacts
+  /// located inside steps; `integrator` names the schemes that took steps (schemes_used).
+  std::uint64_t velocity_level_steps = 0, events = 0;
   bool diverged = false;
   /// The run was stopped at SimulateOptions::max_body_steps (adaptive internal steps).
   bool stopped = false;
@@ -493,5 +510,7 @@ SimulateResult simulate_headless(const SimulateOptions& options);
 /// "orientation": [x,y,z,w], "twist": [wx,wy,wz,vx,vy,vz]}}), and "diverged" (true/false) and
 /// "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);
+/// The steps by scheme as JSON members, e.g. "rkmk4": 9800, "contact_semi_implicit": 200.
+std::string steps_by_scheme(const SimulateResult& r);
 
 }  // namespace se3

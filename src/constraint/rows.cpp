@@ -572,7 +572,14 @@ void add_joint_limit_rows(ConstraintRows& rows, const SystemKinematics& s, const
       if (g >= reach) continue;
       const int r = rows.add(RowType::JointLimit, i);
       rows.J(r, s.col0 + col) = side == 0 ? 1.0 : -1.0;
-      rows.b[r] = gap_reference(g, h, p);
+      double ref = gap_reference(g, h, p);
+      if (p.limit_restitution > 0) {  // an impact within this step bounces, as contacts do
+        const double vn = side == 0 ? vfree[col] : -vfree[col];
+        if (vn < -p.restitution_velocity && g + h * vn <= p.slop) {
+          ref = std::max(ref, -p.limit_restitution * vn);
+        }
+      }
+      rows.b[r] = ref;
       rows.gap[r] = g;
     }
   }

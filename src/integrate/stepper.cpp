@@ -66,7 +66,23 @@ Stepper::Stepper(const Model& model, const StepperOptions& opt)
       opt_(opt),
       data_(model),
       tau_(VecX::Zero(model.nv)),
-      passive_(model, opt.friction_eps, opt.passive_forces) {}
+      passive_(model, opt.friction_eps, opt.passive_forces),
+      free_base_(model) {}
+
+StepInfo Stepper::velocity_level_step(State& x, const VecX& tau_cmd, double h) {
+  const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
+  const VecX* a_unconstrained = nullptr;
+  if (hook_) {  // the hook's constraint forces count as external on the base
+    a_unconstrained = &aba(model_, data_, x.base, x.q, x.v, passive_.any() ? tau_ : tau_cmd);
+  }
+  const VecX& af = free_base_.free_acceleration(data_, x, tau_cmd, a, a_unconstrained);
+  detail::axpy(model_.nv, h, af.data(), x.v.data());
+  free_base_.advance(data_, x, h);
+  StepInfo info;
+  info.evaluations = hook_ ? 2 : 1;
+  info.substeps = 1;
+  return info;
+}
 
 void Stepper::passive_forces(const VecX& v, VecX& out) const {
   out.resize(model_.nv);
@@ -121,15 +137,7 @@ class SemiImplicitEulerStepper final : public Stepper {
   int order() const override { return 1; }
   bool contact_scheme() const override { return true; }
   StepInfo step(State& x, const VecX& tau_cmd, double h) override {
-    const VecX& a = acceleration(x.base, x.q, x.v, tau_cmd);
-    const int nq = model_.nq, nv = model_.nv;
-    detail::axpy(nv, h, a.data(), x.v.data());
-    if (model_.floating) advance_base(x.base, h * x.v.head<6>());
-    detail::axpy(nq, h, x.v.data() + model_.nv_base(), x.q.data());
-    StepInfo info;
-    info.evaluations = 1;
-    info.substeps = 1;
-    return info;
+    return velocity_level_step(x, tau_cmd, h);
   }
 };
 

@@ -873,7 +873,20 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   se3_sim::SimStats st;
   const double wall = seconds(now - period_start_);
   st.header.stamp = t;
-  st.integrator = sim_->integrator();
+  st.integrator = sim_->schemes_used();
+  {
+    const std::string own = sim_->integrator();
+    const std::uint64_t contact = sim_->velocity_level_steps();
+    if (own != se3::kContactStepper && sim_->steps() > contact) {
+      st.schemes.push_back(own);
+      st.scheme_steps.push_back(sim_->steps() - contact);
+    }
+    if (contact > 0 || own == se3::kContactStepper) {
+      st.schemes.push_back(se3::kContactStepper);
+      st.scheme_steps.push_back(own == se3::kContactStepper ? sim_->steps() : contact);
+    }
+    st.events = sim_->events();
+  }
   st.dt = sim_->dt();
   st.sim_time = sim_->time();
   st.step_time_mean = period_steps_ ? seconds(step_wall_) / period_steps_ : 0.0;

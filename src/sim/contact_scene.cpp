@@ -155,7 +155,8 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
     for (const Field& x :
          r.fields(v, {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol",
                       "projection_iterations", "singular_tol", "pgs_iterations", "pgs_tol", "erp",
-                      "slop", "margin", "bilateral_erp", "restitution_velocity", "solver"})) {
+                      "slop", "margin", "bilateral_erp", "restitution_velocity",
+                      "limit_restitution", "solver"})) {
       const std::string& k = x.name;
       if (k == "solver") {
         const std::string name = r.text(x);
@@ -176,6 +177,8 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
         o.erp = r.in_range(x, 0, 1);
       } else if (k == "bilateral_erp") {
         o.bilateral_erp = r.in_range(x, 0, 1);
+      } else if (k == "limit_restitution") {
+        o.limit_restitution = r.in_range(x, 0, 1);
       } else {
         const double val = r.non_negative(x);
         if (k == "baumgarte_omega") o.baumgarte_omega = val;

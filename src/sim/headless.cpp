@@ -145,9 +145,15 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   SimulateResult r;
   r.integrator = sim.integrator();
   r.dt = scene.dt;
-  const bool conserve_momentum = sim.model().floating && scene.gravity.norm() == 0.0;
-  const double T0 = sim.kinetic_energy();
-  const Vec6 h0 = sim.momentum();
+  // The whole scene's energy and momentum (robot and free objects). Momentum is conserved in
+  // zero gravity when nothing holds the scene: a free (or no) robot base, no ground and no
+  // static object.
+  bool held = !sim.model().floating && sim.model().n > 0;
+  held = held || spec.ground;
+  for (const SceneObject& ob : scene.objects) held = held || ob.is_static;
+  const bool conserve_momentum = !held && scene.gravity.norm() == 0.0;
+  const double T0 = sim.scene_kinetic_energy();
+  const Vec6 h0 = sim.scene_momentum();
   const Vec3 c0 = sim.center_of_mass();
   double dE = 0, dB = 0, T_max = T0, dh = 0, dc = 0;
   double dcon = sim.constraints() ? sim.constraint_error() : 0.0;
@@ -173,13 +179,13 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
       break;
     }
     // Diagnostics every step, outside the timed part.
-    const double T = sim.kinetic_energy();
-    const double E = T + sim.potential_energy();
+    const double T = sim.scene_kinetic_energy();
+    const double E = T + sim.scene_potential_energy();
     dE = std::max(dE, std::abs(E - T0));
     dB = std::max(dB, std::abs(E - T0 - sim.work()));
     T_max = std::max(T_max, T);
     if (conserve_momentum) {
-      dh = std::max(dh, (sim.momentum() - h0).norm());
+      dh = std::max(dh, (sim.scene_momentum() - h0).norm());
       const Vec3 c_free = c0 + sim.time() * h0.tail<3>() / sim.model().total_mass();
       dc = std::max(dc, (sim.center_of_mass() - c_free).norm());
     }
@@ -192,6 +198,9 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   r.substeps = sim.substeps();
   r.rejected = sim.rejected();
   r.evaluations = sim.evaluations();
+  r.velocity_level_steps = sim.velocity_level_steps();
+  r.events = sim.events();
+  r.integrator = sim.schemes_used();
   const double scale = T0 > 0 ? T0 : T_max;
   if (scale > 0) r.energy_drift_rel = dE / scale;
   if (scale > 0) r.energy_balance_rel = dB / scale;
@@ -207,6 +216,20 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
         {sim.object_specs()[j].name, sim.objects()[j].pose, sim.objects()[j].twist});
   }
   return r;
+}
+
+std::string steps_by_scheme(const SimulateResult& r) {
+  const std::string own = r.integrator.substr(0, r.integrator.find('+'));
+  const std::uint64_t contact = r.velocity_level_steps;
+  std::string out;
+  if (own != kContactStepper && r.steps > contact) {
+    out += "\"" + own + "\": " + std::to_string(r.steps - contact);
+  }
+  if (contact > 0 || own == kContactStepper) {
+    out += std::string(out.empty() ? "" : ", ") + "\"" + kContactStepper +
+           "\": " + std::to_string(own == kContactStepper ? r.steps : contact);
+  }
+  return out;
 }
 
 std::string simulate_result_json(const SimulateResult& r) {
@@ -236,7 +259,8 @@ std::string simulate_result_json(const SimulateResult& r) {
   std::ostringstream o;
   o << "{\"integrator\": " << text(r.integrator) << ", \"dt\": " << num(r.dt)
     << ", \"sim_s\": " << num(r.sim_s) << ", \"wall_s\": " << num(r.wall_s)
-    << ", \"steps\": " << r.steps << ", \"energy_drift_rel\": " << num(r.energy_drift_rel)
+    << ", \"steps\": " << r.steps << ", \"steps_by_scheme\": {" << steps_by_scheme(r) << "}"
+    << ", \"events\": " << r.events << ", \"energy_drift_rel\": " << num(r.energy_drift_rel)
     << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max)

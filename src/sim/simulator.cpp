@@ -151,6 +151,7 @@ void Simulator::reset() {
   last_checked_ = initial_;
   time_ = last_checked_time_ = 0;
   steps_ = substeps_ = rejected_ = evaluations_ = 0;
+  velocity_level_steps_ = events_ = 0;
   last_checked_steps_ = 0;
   steps_to_energy_check_ = config_.guard.energy_check_every;
   failure_.clear();
@@ -580,6 +581,8 @@ bool Simulator::step() {
     penetration_max_ = std::max(penetration_max_, penetration_);
   }
   ++steps_;
+  if (info.velocity_level) ++velocity_level_steps_;
+  events_ += static_cast<std::uint64_t>(info.events);
   time_ += config_.dt;
   passive_power_ = passive_power();
   W_ += 0.5 * config_.dt * (P0 + dot(nv, tau.data(), state_.v.data()) + passive_power_);
@@ -670,6 +673,46 @@ double Simulator::potential_energy() {
 
 Vec6 Simulator::momentum() {
   return se3::spatial_momentum(*model_, diag_, state_.base, state_.q, state_.v);
+}
+
+std::string Simulator::schemes_used() const {
+  const std::string own = stepper_->name();
+  if (own == kContactStepper || velocity_level_steps_ == 0) return own;
+  if (velocity_level_steps_ == steps_) return kContactStepper;
+  return own + "+" + kContactStepper;
+}
+
+double Simulator::scene_kinetic_energy() {
+  double T = kinetic_energy();
+  for (const ObjectBody& b : bodies_) {
+    const ObjectState& o = objects_[b.index];
+    T += 0.5 * o.twist.dot(object_specs_[b.index].inertia * o.twist);
+  }
+  return T;
+}
+
+double Simulator::scene_potential_energy() {
+  double U = potential_energy();
+  for (const ObjectBody& b : bodies_) {
+    const SceneObject& spec = object_specs_[b.index];
+    const ObjectState& o = objects_[b.index];
+    const Vec3 c = spec.inertia.m > 0 ? Vec3(spec.inertia.h / spec.inertia.m) : Vec3::Zero();
+    const Vec3 now = o.pose.p + o.pose.R * c, then = spec.pose.p + spec.pose.R * c;
+    U -= spec.inertia.m * model_->gravity.dot(now - then);
+  }
+  return U;
+}
+
+Vec6 Simulator::scene_momentum() {
+  Vec6 h = momentum();
+  for (const ObjectBody& b : bodies_) {
+    const ObjectState& o = objects_[b.index];
+    const Vec6 hb = object_specs_[b.index].inertia * o.twist;  // body frame [angular; linear]
+    const Vec3 lin = o.pose.R * hb.tail<3>();
+    h.head<3>() += o.pose.R * hb.head<3>() + o.pose.p.cross(lin);
+    h.tail<3>() += lin;
+  }
+  return h;
 }
 
 Vec3 Simulator::center_of_mass() {

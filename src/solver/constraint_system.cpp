@@ -171,6 +171,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   params_.bilateral_erp = opt_.bilateral_erp;
   params_.margin = opt_.margin;
   params_.restitution_velocity = opt_.restitution_velocity;
+  params_.limit_restitution = opt_.limit_restitution;
   solver_opt_.iterations = opt_.pgs_iterations;
   solver_opt_.tol = opt_.pgs_tol;
   solver_opt_.singular_tol = opt_.singular_tol;

@@ -57,6 +57,10 @@ int cmd_simulate(int argc, char** argv) {
         "constraint error max: %s\n",
         fig(r.energy_drift_rel).c_str(), fig(r.momentum_drift_rel).c_str(),
         fig(r.constraint_error_max).c_str());
+    std::string by = se3::steps_by_scheme(r);
+    for (char& ch : by) ch = ch == '"' ? ' ' : ch;
+    std::printf("steps by scheme:%s; limit impacts located: %llu\n", by.c_str(),
+                static_cast<unsigned long long>(r.events));
     if (r.diverged) std::printf("diverged: %s\n", r.status.c_str());
   }
   if (r.diverged) {
