@@ -328,9 +328,10 @@ void SimulatorNodeImpl::configure() {
   }
   joints_ = joint_table(m, scene_.locked_joints);
   tree_ = tf_tree(m, world_frame_);
-  urdf_text_ = !urdf_xml.empty()                                ? urdf_xml
-               : scene_.robot_path.compare(0, 6, "chain:") == 0 ? std::string()
-                                                                : read_file(scene_.robot_path);
+  urdf_text_ = !urdf_xml.empty() ? urdf_xml
+               : scene_.robot_path.empty() || scene_.robot_path.compare(0, 6, "chain:") == 0
+                   ? std::string()
+                   : read_file(scene_.robot_path);
   setup_controllers();
   // The scene's objects (free and static; make_simulator set them and their contact): on /tf
   // (a frame each, parent the world) and on sim_markers (namespace objects).
