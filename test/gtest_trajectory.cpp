@@ -8,7 +8,9 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <fstream>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -520,6 +522,31 @@ TEST(Transmissions, VelocityInterfaceRefusesAnEffortController) {
   EXPECT_EQ(
       controller_error([&] { check_interfaces(effort, parse_transmissions(two_joint_urdf(""))); }),
       "");
+}
+
+// The shipped config/controllers/ur5.yaml: its trajectory controller takes its interface's gains
+// from the file's gazebo_ros_control/pid_gains, matches the UR5's transmissions (position
+// interface), and an effort controller on the same joints does not.
+TEST(Transmissions, ShippedUr5ConfigMatchesTheUr5) {
+  std::ifstream in(kSource + "/config/controllers/ur5.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const YAML::Node root = YAML::Load(text.str());
+  auto specs = parse_controllers(root, {"arm_controller"}, "ur5.yaml");
+  set_interface_gains(specs, parse_interface_gains(root["gazebo_ros_control"]["pid_gains"]));
+  std::ifstream urdf_in(kSource + "/data/robots/ur5_robot.urdf");
+  std::stringstream urdf;
+  urdf << urdf_in.rdbuf();
+  const auto transmissions = parse_transmissions(urdf.str());
+  EXPECT_EQ(transmissions.size(), 6u);
+  EXPECT_EQ(controller_error([&] { check_interfaces(specs, transmissions); }), "");
+  auto sim = ur5();
+  EXPECT_EQ(controller_error([&] { sim->set_controllers(specs); }), "");
+  const auto effort = parse_controllers_text(effort_trajectory_yaml());
+  EXPECT_NE(controller_error([&] {
+              check_interfaces(effort, transmissions);
+            }).find("declares PositionJointInterface"),
+            std::string::npos);
 }
 
 // ------------------------------------------------------------------ types
