@@ -8,6 +8,7 @@ pkgs=(g++ cmake make catkin python3-catkin-pkg libroscpp-dev rosbash
   libsensor-msgs-dev ros-sensor-msgs libgeometry-msgs-dev ros-geometry-msgs
   libvisualization-msgs-dev ros-visualization-msgs libros-rosgraph-msgs-dev ros-rosgraph-msgs
   libtf2-ros-dev libtf2-msgs-dev ros-tf2-msgs ros-message-generation
+  libtrajectory-msgs-dev ros-trajectory-msgs python3-trajectory-msgs
   liburdfdom-dev libeigen3-dev libcairo2-dev libbenchmark-dev libyaml-cpp-dev
   libassimp-dev libmeshoptimizer-dev libfcl-dev libqhull-dev libtinyxml2-dev libimage-transport-dev libroslib-dev libosmesa6-dev
   python3-rostest librostest-dev libgtest-dev python3-rostopic python3-tf2-msgs python3-sensor-msgs python3-visualization-msgs python3-std-msgs python3-rospy

@@ -362,6 +362,46 @@ wrist: {type: effort_controllers/JointEffortController, joint: panda_joint7}
   }
 }
 
+// A trajectory controller (quintic segments, the effort flavour) on the UR5 and a velocity
+// controller through the velocity interface: sampling the splines, the PIDs and the tolerance
+// checks allocate nothing in a step.
+TEST(Alloc, TrajectoryControllerStepsAllocateNothing) {
+  auto sim =
+      make_simulator(load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/fixed_arm.yaml"));
+  auto specs = parse_controllers_text(R"(
+arm:
+  type: effort_controllers/JointTrajectoryController
+  joints: [shoulder_pan_joint, shoulder_lift_joint, elbow_joint, wrist_1_joint, wrist_2_joint]
+  gains:
+    shoulder_pan_joint: {p: 4000, d: 200}
+    shoulder_lift_joint: {p: 4000, d: 200}
+    elbow_joint: {p: 4000, d: 100}
+    wrist_1_joint: {p: 300, d: 4}
+    wrist_2_joint: {p: 300, d: 4}
+  constraints: {goal_time: 1, wrist_1_joint: {trajectory: 1, goal: 0.1}}
+wrist: {type: velocity_controllers/JointVelocityController, joint: wrist_3_joint,
+        pid: {p: 1}}
+)");
+  sim->set_controllers(specs);
+  TrajectoryCommand cmd;
+  cmd.joint_names = specs[0].joints;
+  for (int p = 1; p <= 5; ++p) {
+    TrajectoryCommand::Point pt;
+    pt.time_from_start = 0.05 * p;
+    for (int j = 0; j < 5; ++j) {
+      pt.positions.push_back(sim->state().q[j] + 0.01 * p);
+      pt.velocities.push_back(0.1);
+      pt.accelerations.push_back(0.0);
+    }
+    cmd.points.push_back(pt);
+  }
+  ASSERT_EQ(sim->controllers()->set_trajectory(0, cmd, sim->time()), "");
+  const double w = 0.2;
+  ASSERT_EQ(sim->controllers()->set_command(1, &w, 1), "");
+  ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(400), 400) << sim->failure(); }), 0);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

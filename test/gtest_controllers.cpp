@@ -146,9 +146,9 @@ effort: {type: effort_controllers/JointGroupEffortController, joints: [a, b]}
 }
 
 TEST(ControllerYaml, ErrorsNameTheControllerTheKeyAndTheLine) {
-  EXPECT_NE(controller_error("x: {type: position_controllers/JointPositionController, joint: a}")
-                .find("c.yaml:1: controller 'x': type 'position_controllers/"
-                      "JointPositionController' is not one"),
+  EXPECT_NE(controller_error("x: {type: diff_drive_controller/DiffDriveController, joint: a}")
+                .find("c.yaml:1: controller 'x': type 'diff_drive_controller/"
+                      "DiffDriveController' is not supported"),
             std::string::npos);
   EXPECT_NE(controller_error("x: {joints: [a]}").find("controller 'x': needs a 'type'"),
             std::string::npos);

@@ -128,10 +128,10 @@ wrist: {type: effort_controllers/JointEffortController, joint: j3}
   }
   EXPECT_EQ(from_xml[0].gains[1].p, 1e-7);  // not rounded on the way
   XmlRpcValue bad = wrist;
-  bad["type"] = std::string("position_controllers/JointPositionController");
+  bad["type"] = std::string("diff_drive_controller/DiffDriveController");
   EXPECT_NE(error_of([&] {
               se3_ros::controllers_from_xmlrpc({"w"}, {bad}, "params");
-            }).find("controller 'w': type 'position_controllers/JointPositionController'"),
+            }).find("controller 'w': type 'diff_drive_controller/DiffDriveController'"),
             std::string::npos);
 }
 

@@ -28,13 +28,40 @@
 // and takes target - q; a continuous joint (no limits) takes the shortest angle; a prismatic
 // joint target - q. After a reset a position controller holds the positions it starts from
 // (ros_control's starting()), velocity and effort commands are 0.
+//
+// Hardware interfaces (gazebo_ros_control's DefaultRobotHWSim): effort_controllers/* write an
+// effort. position_controllers/* and velocity_controllers/* write a position or a velocity,
+// which a PID of the interface turns into an effort: e = position error (as above) or
+// v_cmd - v, effort = PID(e) with the derivative from the last error, clamped to the effort
+// limit. Its gains are the joint's /gazebo_ros_control/pid_gains/JOINT (set_interface_gains),
+// else the controller's own pid/gains when the type has no other use for them
+// (position_controllers/*, velocity_controllers/JointVelocityController and
+// JointGroupVelocityController); a joint with neither is an error (gazebo_ros_control would
+// then set the joint's state directly, which a dynamics simulator does not do).
+//
+// JointTrajectoryController (ros_controllers' joint_trajectory_controller, trajectory.h for the
+// sampling): desired position, velocity and acceleration sampled at every step; the effort
+// flavour writes PID(e_pos, e_vel) (gains: required), the velocity flavour
+// velocity_ff * v_des + PID(e_pos, e_vel) to the velocity interface, the position flavour the
+// desired position to the position interface. YAML keys:
+//     joints: [...]
+//     gains: {j1: {p: 100, i: 0, d: 10, i_clamp: 1}, ...}   (effort and velocity flavours)
+//     velocity_ff: {j1: 1.0}                                 (velocity flavour, default 0)
+//     constraints: {goal_time: 0.5, stopped_velocity_tolerance: 0.01,
+//                   j1: {trajectory: 0.1, goal: 0.05}}      (0: not checked)
+//     state_publish_rate: 50, action_monitor_rate: 20, stop_trajectory_duration: 0,
+//     allow_partial_joints_goal: false
 #pragma once
 
+#include <limits>
+#include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "se3_sim/dynamics.h"
+#include "se3_sim/trajectory.h"
 
 namespace YAML {
 class Node;
@@ -77,11 +104,26 @@ class Pid {
 
 enum class ControllerKind {
   GroupEffort,    ///< effort_controllers/JointGroupEffortController
-  GroupPosition,  ///< effort_controllers/JointGroupPositionController
+  GroupPosition,  ///< {effort,position}_controllers/JointGroupPositionController
   Effort,         ///< effort_controllers/JointEffortController
-  Position,       ///< effort_controllers/JointPositionController
-  Velocity,       ///< effort_controllers/JointVelocityController
+  Position,       ///< {effort,position}_controllers/JointPositionController
+  Velocity,       ///< {effort,velocity}_controllers/JointVelocityController
+  GroupVelocity,  ///< velocity_controllers/JointGroupVelocityController
+  Trajectory,     ///< {effort,velocity,position}_controllers/JointTrajectoryController
   JointState,     ///< joint_state_controller/JointStateController (does nothing here)
+};
+
+/// The hardware interface a controller writes (hardware_interface::*JointInterface).
+enum class JointInterface { Effort, Velocity, Position };
+/// "EffortJointInterface", "VelocityJointInterface", "PositionJointInterface".
+const char* interface_name(JointInterface iface);
+
+/// A trajectory controller's `constraints`: per joint position tolerances along the way
+/// (`trajectory`) and at the end (`goal`), 0 meaning not checked.
+struct TrajectoryConstraints {
+  double goal_time = 0;                      ///< s after the last point (0: no limit)
+  double stopped_velocity_tolerance = 0.01;  ///< rad/s or m/s at the goal (0: not checked)
+  std::vector<double> trajectory, goal;      ///< per joint
 };
 
 /// One controller's configuration, as read from YAML (joints by name; not yet bound to a model).
@@ -89,12 +131,25 @@ struct ControllerSpec {
   std::string name;
   std::string type;  ///< as written, e.g. "effort_controllers/JointGroupPositionController"
   ControllerKind kind = ControllerKind::GroupEffort;
-  std::vector<std::string> joints;  ///< one for single-joint types
-  std::vector<PidGains> gains;      ///< per joint (PID types), else empty
+  JointInterface iface = JointInterface::Effort;  ///< the interface the type writes
+  std::vector<std::string> joints;                ///< one for single-joint types
+  std::vector<PidGains> gains;  ///< per joint (PID types; may be empty where optional)
+  /// Per joint: the interface's PID (/gazebo_ros_control/pid_gains/JOINT), when set.
+  std::vector<std::optional<PidGains>> interface_gains;
+  // JointTrajectoryController only
+  TrajectoryConstraints constraints;
+  std::vector<double> velocity_ff;  ///< per joint (velocity flavour)
+  double state_publish_rate = 50, action_monitor_rate = 20, stop_trajectory_duration = 0;
+  bool allow_partial_joints_goal = false;
 };
 
-/// The kind of a type name; throws ControllerError for a type this simulator does not run.
+/// The kind of a type name; throws ControllerError for a type this simulator does not run, naming
+/// it and listing the ones it runs.
 ControllerKind controller_kind(const std::string& type, const std::string& controller);
+/// The hardware interface a type writes (its package: effort_, velocity_, position_controllers).
+JointInterface controller_interface(const std::string& type);
+/// Every type this simulator runs, comma-separated.
+std::string supported_controller_types();
 /// True for the kinds that take one joint and a std_msgs/Float64 command.
 bool single_joint(ControllerKind kind);
 /// True for position and velocity kinds (they need gains).
@@ -113,6 +168,45 @@ std::vector<ControllerSpec> parse_controllers(const YAML::Node& map,
 std::vector<ControllerSpec> parse_controllers_text(const std::string& yaml_text,
                                                    const std::vector<std::string>& names = {},
                                                    const std::string& where = "controllers");
+
+/// gazebo_ros_control's `pid_gains` map {JOINT: {p, i, d, i_clamp}, ...}.
+std::map<std::string, PidGains> parse_interface_gains(const YAML::Node& map,
+                                                      const std::string& where = "pid_gains");
+/// Sets every position- and velocity-interface joint's interface_gains from the map.
+void set_interface_gains(std::vector<ControllerSpec>& specs,
+                         const std::map<std::string, PidGains>& by_joint);
+
+/// A trajectory (trajectory_msgs/JointTrajectory without ROS): points in time from `start`.
+struct TrajectoryCommand {
+  std::vector<std::string> joint_names;
+  /// Simulated time of time_from_start 0; NaN: now (a header.stamp of zero).
+  double start = std::numeric_limits<double>::quiet_NaN();
+  struct Point {
+    double time_from_start = 0;
+    std::vector<double> positions, velocities, accelerations;  ///< per joint; v, a may be empty
+  };
+  std::vector<Point> points;
+};
+
+/// Where a trajectory controller stands (ros_controllers' action results, without the action).
+enum class TrajectoryStatus {
+  Idle,                   ///< holding a position (no trajectory since the start or a reset)
+  Active,                 ///< following a trajectory
+  Succeeded,              ///< past the last point, within the goal tolerances
+  PathToleranceViolated,  ///< a joint left its `trajectory` tolerance: stopped
+  GoalToleranceViolated,  ///< not within the `goal` tolerances goal_time after the last point
+};
+const char* status_name(TrajectoryStatus s);
+
+/// A trajectory controller's state at its last update (control_msgs'
+/// JointTrajectoryControllerState): per joint.
+struct TrajectoryState {
+  std::vector<double> desired_q, desired_v, desired_a, actual_q, actual_v, error_q, error_v;
+  TrajectoryStatus status = TrajectoryStatus::Idle;
+  int status_joint = -1;  ///< the joint (index into joints) a violation names
+  double time = 0;        ///< simulated time of the last update
+  double end_time = 0;    ///< simulated time of the last point
+};
 
 /// Controllers bound to a model: joint indices resolved, commands and PID states preallocated,
 /// so update() allocates nothing.
@@ -136,22 +230,48 @@ class ControllerSet {
   /// True when joint i (1..n) is driven by a controller.
   bool controls(int i) const { return owner_[i] >= 0; }
 
-  /// Every controller's effort at state x over a period dt, added to tau (size nv, the model's
-  /// velocity coordinates) on the joints they drive, the sum clamped to the URDF effort limit;
-  /// the other entries are left as they are.
-  void update(const State& x, double dt, VecX& tau);
-  /// ros_control's starting(): position controllers hold x's positions, other commands 0, PID
-  /// states cleared.
+  /// Every controller's effort at state x and simulated time t over a period dt, added to tau
+  /// (size nv, the model's velocity coordinates) on the joints they drive, the sum clamped to
+  /// the URDF effort limit; the other entries are left as they are. Allocates nothing.
+  void update(const State& x, double t, double dt, VecX& tau);
+  /// ros_control's starting(): position controllers hold x's positions (trajectory controllers
+  /// hold them as their trajectory), other commands 0, PID states cleared.
   void reset(const State& x);
 
+  /// Gives trajectory controller c a new trajectory at simulated time `now` (not inside a step:
+  /// this allocates). It replaces the rest of the current one from its start time (or now, if
+  /// later): the new motion starts from the current desired position, velocity and
+  /// acceleration there, continuous in position and velocity; points at or before that time are
+  /// dropped; joints it does not name keep their trajectory (allow_partial_joints_goal). No
+  /// points: stop (hold, ramping down over stop_trajectory_duration). Returns "" when taken,
+  /// else the reason it was refused (nothing changed).
+  std::string set_trajectory(int c, const TrajectoryCommand& cmd, double now);
+  /// Trajectory controller c's desired position, velocity, acceleration of its joint j at time
+  /// t (the splines as they stand).
+  void sample(int c, int j, double t, double& q, double& v, double& a) const;
+  /// Trajectory controller c's state at its last update.
+  const TrajectoryState& trajectory_state(int c) const { return ctl_[c].state; }
+
  private:
+  /// One joint's trajectory: segments in time order; sampling past a segment's end holds its
+  /// end position (zero velocity) when it ends its trajectory, else evaluates its end.
+  struct Track {
+    std::vector<double> t0;
+    std::vector<Spline> seg;
+  };
   struct Ctl {
     ControllerSpec spec;
     std::vector<int> joint;  ///< body indices 1..n
     std::vector<double> command;
-    std::vector<Pid> pid;
+    std::vector<Pid> pid;  ///< the controller's PID (effort_controllers, trajectory)
+    std::vector<Pid> hw;   ///< the interface's PID (position and velocity interfaces)
+    std::vector<Track> track;
+    TrajectoryState state;
   };
   double position_error(int i, double target, double q) const;
+  void hold(Ctl& c, int j, double q, double t);
+  void stop(Ctl& c, double now);
+  void check_tolerances(Ctl& c, double t);
   const Model& model_;
   std::vector<Ctl> ctl_;
   std::vector<int> owner_;  ///< per body: controller index or -1

@@ -9,6 +9,7 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <trajectory_msgs/JointTrajectory.h>
 #include <visualization_msgs/MarkerArray.h>
 #include <yaml-cpp/yaml.h>
 
@@ -27,6 +28,7 @@
 #include "se3_sim/ChainState.h"
 #include "se3_sim/ConstraintForces.h"
 #include "se3_sim/JointTorques.h"
+#include "se3_sim/JointTrajectoryControllerState.h"
 #include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
@@ -34,6 +36,7 @@
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/sim.h"
+#include "se3_sim/transmissions.h"
 
 namespace se3_ros {
 
@@ -132,6 +135,7 @@ class SimulatorNodeImpl {
   void on_torques(const ros::MessageEvent<se3_sim::JointTorques const>& event);
   void on_group_command(int c, const std_msgs::Float64MultiArray::ConstPtr& msg);
   void on_single_command(int c, const std_msgs::Float64::ConstPtr& msg);
+  void on_trajectory(int c, const trajectory_msgs::JointTrajectory::ConstPtr& msg);
   void controller_command(int c, const double* values, size_t n);
   /// Under mu_: after an accepted command, lockstep's advance and state.
   void after_command();
@@ -157,6 +161,9 @@ class SimulatorNodeImpl {
   /// Under mu_: joint_states, /tf, chain_state (and /clock).
   void publish_state();
   void publish_clock();
+  /// Under mu_: each trajectory controller's NAME/state at its state_publish_rate (simulated
+  /// time), and a log line when its status changes.
+  void publish_controller_states();
   /// Under mu_: sim_stats, markers, constraint forces.
   void publish_stats_and_markers(Clock::time_point now);
   void add_constraint_forces(const se3::ConstraintSystem& sys, const std_msgs::Header& header,
@@ -167,6 +174,11 @@ class SimulatorNodeImpl {
   ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_, constraint_pub_;
   ros::Subscriber cmd_sub_;
   std::vector<ros::Subscriber> ctl_subs_;
+  std::vector<ros::Publisher> ctl_state_pubs_;  ///< per controller (trajectory ones: NAME/state)
+  std::vector<double> ctl_state_last_;          ///< simulated time of the last NAME/state
+  std::vector<se3::TrajectoryStatus> ctl_status_;
+  se3_sim::JointTrajectoryControllerState ctl_state_msg_;
+  std::string urdf_text_;  ///< the robot's URDF (transmissions), "" for chain:N
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> tf_static_;
@@ -316,6 +328,10 @@ void SimulatorNodeImpl::configure() {
   }
   joints_ = joint_table(m, scene_.locked_joints);
   tree_ = tf_tree(m, world_frame_);
+  urdf_text_ = !urdf_xml.empty() ? urdf_xml
+               : scene_.robot_path.empty() || scene_.robot_path.compare(0, 6, "chain:") == 0
+                   ? std::string()
+                   : read_file(scene_.robot_path);
   setup_controllers();
   // The scene's objects (free and static; make_simulator set them and their contact): on /tf
   // (a frame each, parent the world) and on sim_markers (namespace objects).
@@ -395,6 +411,15 @@ void SimulatorNodeImpl::setup_controllers() {
     if (!replaced) specs.push_back(s);
   }
   for (const auto& p : from_params) specs.push_back(p);
+  // The position and velocity interfaces' PIDs, where gazebo_ros_control reads them.
+  const ros::NodeHandle gz(ctl_nh_, "gazebo_ros_control");
+  XmlRpc::XmlRpcValue pid_gains;
+  if (gz.getParam("pid_gains", pid_gains)) {
+    se3::set_interface_gains(
+        specs, se3::parse_interface_gains(to_yaml(pid_gains), gz.resolveName("pid_gains")));
+  }
+  // Each controller's interface against the joint's <transmission>s.
+  se3::check_interfaces(specs, se3::parse_transmissions(urdf_text_));
   sim_->set_controllers(specs);
   for (const std::string& w :
        se3::gain_stability_warnings(sim_->model(), sim_->state(), specs, sim_->dt())) {
@@ -429,7 +454,14 @@ bool SimulatorNodeImpl::init() {
     for (int c = 0; c < set->size(); ++c) {
       const se3::ControllerSpec& s = set->spec(c);
       const std::string topic = s.name + "/command";
-      if (se3::single_joint(s.kind)) {
+      if (s.kind == se3::ControllerKind::Trajectory) {
+        ctl_subs_.push_back(ctl_nh_.subscribe<trajectory_msgs::JointTrajectory>(
+            topic, 100,
+            [this, c](const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
+              on_trajectory(c, msg);
+            },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      } else if (se3::single_joint(s.kind)) {
         ctl_subs_.push_back(ctl_nh_.subscribe<std_msgs::Float64>(
             topic, 1000,
             [this, c](const std_msgs::Float64::ConstPtr& msg) { on_single_command(c, msg); },
@@ -444,7 +476,14 @@ bool SimulatorNodeImpl::init() {
       }
       ROS_INFO("simulator: controller %s (%s, %zu joints) on %s", s.name.c_str(), s.type.c_str(),
                s.joints.size(), ctl_subs_.back().getTopic().c_str());
+      ctl_state_pubs_.emplace_back();
+      if (s.kind == se3::ControllerKind::Trajectory) {
+        ctl_state_pubs_.back() =
+            ctl_nh_.advertise<se3_sim::JointTrajectoryControllerState>(s.name + "/state", 10);
+      }
     }
+    ctl_state_last_.assign(set->size(), -1.0);
+    ctl_status_.assign(set->size(), se3::TrajectoryStatus::Idle);
   }
   services_.push_back(nh_.advertiseService("simulator/reset", &SimulatorNodeImpl::on_reset, this));
   services_.push_back(nh_.advertiseService("simulator/pause", &SimulatorNodeImpl::on_pause, this));
@@ -509,6 +548,7 @@ void SimulatorNodeImpl::run() {
         std::lock_guard<std::mutex> lock(mu_);
         if (!lockstep_) publish_state();
         publish_stats_and_markers(now);
+        publish_controller_states();
       }
       next_pub += pub_period;
       if (next_pub <= now) next_pub = now + pub_period;  // fell behind: skip, keep the rate
@@ -619,6 +659,38 @@ void SimulatorNodeImpl::on_group_command(int c, const std_msgs::Float64MultiArra
 
 void SimulatorNodeImpl::on_single_command(int c, const std_msgs::Float64::ConstPtr& msg) {
   controller_command(c, &msg->data, 1);
+}
+
+// header.stamp zero: now; else with use_sim_time the stamp is simulated time, and without it a
+// wall-clock time, taken as that far from now in simulated time (scaled by the real-time factor).
+void SimulatorNodeImpl::on_trajectory(int c,
+                                      const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
+  se3::TrajectoryCommand cmd;
+  cmd.joint_names = msg->joint_names;
+  cmd.points.resize(msg->points.size());
+  for (size_t p = 0; p < msg->points.size(); ++p) {
+    const trajectory_msgs::JointTrajectoryPoint& in = msg->points[p];
+    se3::TrajectoryCommand::Point& out = cmd.points[p];
+    out.time_from_start = in.time_from_start.toSec();
+    out.positions = in.positions;
+    out.velocities = in.velocities;
+    out.accelerations = in.accelerations;
+  }
+  std::unique_lock<std::mutex> lock(mu_);
+  const double now = sim_->time();
+  if (!msg->header.stamp.isZero()) {
+    cmd.start = use_sim_time_ ? msg->header.stamp.toSec()
+                              : now + (msg->header.stamp - ros::Time::now()).toSec() *
+                                          (rtf_ > 0 ? rtf_ : 1.0);
+  }
+  const std::string why = sim_->controllers()->set_trajectory(c, cmd, now);
+  if (!why.empty()) {
+    lock.unlock();
+    reject("trajectory", why);
+    return;
+  }
+  ++accepted_;
+  after_command();
 }
 
 void SimulatorNodeImpl::controller_command(int c, const double* values, size_t n) {
@@ -864,6 +936,46 @@ void SimulatorNodeImpl::publish_state() {
   joint_pub_.publish(js_);
   tf_->sendTransform(tfs_);
   chain_pub_.publish(cs_);
+}
+
+void SimulatorNodeImpl::publish_controller_states() {
+  se3::ControllerSet* set = sim_->controllers();
+  if (!set) return;
+  const double t = sim_->time();
+  for (int c = 0; c < set->size(); ++c) {
+    const se3::ControllerSpec& s = set->spec(c);
+    if (s.kind != se3::ControllerKind::Trajectory) continue;
+    const se3::TrajectoryState& st = set->trajectory_state(c);
+    if (st.status != ctl_status_[c]) {
+      ctl_status_[c] = st.status;
+      const std::string joint =
+          st.status_joint >= 0 ? " (joint " + s.joints[st.status_joint] + ")" : std::string();
+      if (st.status == se3::TrajectoryStatus::PathToleranceViolated ||
+          st.status == se3::TrajectoryStatus::GoalToleranceViolated) {
+        ROS_WARN("simulator: controller %s: %s%s", s.name.c_str(), se3::status_name(st.status),
+                 joint.c_str());
+      } else if (st.status == se3::TrajectoryStatus::Succeeded) {
+        ROS_INFO("simulator: controller %s: trajectory %s", s.name.c_str(),
+                 se3::status_name(st.status));
+      }
+    }
+    if (!(s.state_publish_rate > 0)) continue;
+    if (t >= ctl_state_last_[c] && t - ctl_state_last_[c] < 1.0 / s.state_publish_rate - 1e-9) {
+      continue;
+    }
+    ctl_state_last_[c] = t;
+    se3_sim::JointTrajectoryControllerState& m = ctl_state_msg_;
+    m.header.stamp = stamp();
+    m.joint_names = s.joints;
+    m.desired.positions = st.desired_q;
+    m.desired.velocities = st.desired_v;
+    m.desired.accelerations = st.desired_a;
+    m.actual.positions = st.actual_q;
+    m.actual.velocities = st.actual_v;
+    m.error.positions = st.error_q;
+    m.error.velocities = st.error_v;
+    ctl_state_pubs_[c].publish(m);
+  }
 }
 
 void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {

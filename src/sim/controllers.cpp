@@ -45,26 +45,76 @@ namespace {
 struct TypeName {
   const char* name;
   ControllerKind kind;
+  JointInterface iface;
 };
 const TypeName kTypes[] = {
-    {"effort_controllers/JointGroupEffortController", ControllerKind::GroupEffort},
-    {"effort_controllers/JointGroupPositionController", ControllerKind::GroupPosition},
-    {"effort_controllers/JointEffortController", ControllerKind::Effort},
-    {"effort_controllers/JointPositionController", ControllerKind::Position},
-    {"effort_controllers/JointVelocityController", ControllerKind::Velocity},
-    {"joint_state_controller/JointStateController", ControllerKind::JointState},
+    {"effort_controllers/JointGroupEffortController", ControllerKind::GroupEffort,
+     JointInterface::Effort},
+    {"effort_controllers/JointGroupPositionController", ControllerKind::GroupPosition,
+     JointInterface::Effort},
+    {"effort_controllers/JointEffortController", ControllerKind::Effort, JointInterface::Effort},
+    {"effort_controllers/JointPositionController", ControllerKind::Position,
+     JointInterface::Effort},
+    {"effort_controllers/JointVelocityController", ControllerKind::Velocity,
+     JointInterface::Effort},
+    {"effort_controllers/JointTrajectoryController", ControllerKind::Trajectory,
+     JointInterface::Effort},
+    {"velocity_controllers/JointVelocityController", ControllerKind::Velocity,
+     JointInterface::Velocity},
+    {"velocity_controllers/JointGroupVelocityController", ControllerKind::GroupVelocity,
+     JointInterface::Velocity},
+    {"velocity_controllers/JointTrajectoryController", ControllerKind::Trajectory,
+     JointInterface::Velocity},
+    {"position_controllers/JointPositionController", ControllerKind::Position,
+     JointInterface::Position},
+    {"position_controllers/JointGroupPositionController", ControllerKind::GroupPosition,
+     JointInterface::Position},
+    {"position_controllers/JointTrajectoryController", ControllerKind::Trajectory,
+     JointInterface::Position},
+    {"joint_state_controller/JointStateController", ControllerKind::JointState,
+     JointInterface::Effort},
 };
 
+// The controller's own gains are optional where the interface's PID may supply them: forward
+// position and velocity types, and the position trajectory controller.
+bool gains_optional(ControllerKind kind, JointInterface iface) {
+  return iface == JointInterface::Position ||
+         (iface == JointInterface::Velocity && kind != ControllerKind::Trajectory);
+}
+
 }  // namespace
+
+const char* interface_name(JointInterface iface) {
+  switch (iface) {
+    case JointInterface::Effort:
+      return "EffortJointInterface";
+    case JointInterface::Velocity:
+      return "VelocityJointInterface";
+    case JointInterface::Position:
+      return "PositionJointInterface";
+  }
+  return "";
+}
+
+std::string supported_controller_types() {
+  std::string known;
+  for (const TypeName& t : kTypes) known += std::string(known.empty() ? "" : ", ") + t.name;
+  return known;
+}
 
 ControllerKind controller_kind(const std::string& type, const std::string& controller) {
   for (const TypeName& t : kTypes) {
     if (type == t.name) return t.kind;
   }
-  std::string known;
-  for (const TypeName& t : kTypes) known += std::string(known.empty() ? "" : ", ") + t.name;
   throw ControllerError("controller '" + controller + "': type '" + type +
-                        "' is not one this simulator runs (" + known + ")");
+                        "' is not supported; supported types: " + supported_controller_types());
+}
+
+JointInterface controller_interface(const std::string& type) {
+  for (const TypeName& t : kTypes) {
+    if (type == t.name) return t.iface;
+  }
+  return JointInterface::Effort;
 }
 
 bool single_joint(ControllerKind kind) {
@@ -74,7 +124,24 @@ bool single_joint(ControllerKind kind) {
 
 bool uses_pid(ControllerKind kind) {
   return kind == ControllerKind::GroupPosition || kind == ControllerKind::Position ||
-         kind == ControllerKind::Velocity;
+         kind == ControllerKind::Velocity || kind == ControllerKind::GroupVelocity ||
+         kind == ControllerKind::Trajectory;
+}
+
+const char* status_name(TrajectoryStatus s) {
+  switch (s) {
+    case TrajectoryStatus::Idle:
+      return "idle";
+    case TrajectoryStatus::Active:
+      return "active";
+    case TrajectoryStatus::Succeeded:
+      return "succeeded";
+    case TrajectoryStatus::PathToleranceViolated:
+      return "path tolerance violated";
+    case TrajectoryStatus::GoalToleranceViolated:
+      return "goal tolerance violated";
+  }
+  return "";
 }
 
 // ------------------------------------------------------------------ YAML
@@ -158,6 +225,78 @@ class Reader {
 
 }  // namespace
 
+namespace {
+
+// A trajectory controller's keys besides joints and gains (ros_controllers' names).
+void parse_trajectory_keys(const Reader& r, const YAML::Node& node, ControllerSpec& s) {
+  const size_t n = s.joints.size();
+  s.constraints.trajectory.assign(n, 0.0);
+  s.constraints.goal.assign(n, 0.0);
+  s.velocity_ff.assign(n, 0.0);
+  auto joint_of = [&](const YAML::Node& key, const std::string& where) -> int {
+    const std::string k = key.IsScalar() ? key.Scalar() : std::string();
+    for (size_t j = 0; j < n; ++j) {
+      if (s.joints[j] == k) return static_cast<int>(j);
+    }
+    r.fail(key, "'" + where + "' names '" + k + "', not one of its joints");
+  };
+  auto nonnegative = [&](const YAML::Node& v, const std::string& key) {
+    const double x = r.number(v, key);
+    if (x < 0) r.fail(v, "'" + key + "' needs a number >= 0");
+    return x;
+  };
+  if (const YAML::Node c = node["constraints"]) {
+    if (!c.IsMap()) r.fail(c, "'constraints' needs a map {goal_time: ..., JOINT: {...}}");
+    for (const auto& kv : c) {
+      const std::string k = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
+      if (k == "goal_time") {
+        s.constraints.goal_time = nonnegative(kv.second, "constraints.goal_time");
+      } else if (k == "stopped_velocity_tolerance") {
+        s.constraints.stopped_velocity_tolerance =
+            nonnegative(kv.second, "constraints.stopped_velocity_tolerance");
+      } else {
+        const int j = joint_of(kv.first, "constraints");
+        if (!kv.second.IsMap()) {
+          r.fail(kv.second, "'constraints." + k + "' needs {trajectory: ..., goal: ...}");
+        }
+        for (const auto& t : kv.second) {
+          const std::string tk = t.first.IsScalar() ? t.first.Scalar() : std::string();
+          const std::string key = "constraints." + k + "." + tk;
+          if (tk == "trajectory") {
+            s.constraints.trajectory[j] = nonnegative(t.second, key);
+          } else if (tk == "goal") {
+            s.constraints.goal[j] = nonnegative(t.second, key);
+          } else {
+            r.fail(t.first, "unknown key '" + key + "' (trajectory, goal)");
+          }
+        }
+      }
+    }
+  }
+  if (const YAML::Node f = node["velocity_ff"]) {
+    if (!f.IsMap()) r.fail(f, "'velocity_ff' needs a map {JOINT: number}");
+    for (const auto& kv : f) {
+      s.velocity_ff[joint_of(kv.first, "velocity_ff")] = r.number(kv.second, "velocity_ff");
+    }
+  }
+  if (node["state_publish_rate"]) {
+    s.state_publish_rate = nonnegative(node["state_publish_rate"], "state_publish_rate");
+  }
+  if (node["action_monitor_rate"]) {
+    s.action_monitor_rate = nonnegative(node["action_monitor_rate"], "action_monitor_rate");
+  }
+  if (node["stop_trajectory_duration"]) {
+    s.stop_trajectory_duration =
+        nonnegative(node["stop_trajectory_duration"], "stop_trajectory_duration");
+  }
+  if (node["allow_partial_joints_goal"]) {
+    s.allow_partial_joints_goal =
+        r.boolean(node["allow_partial_joints_goal"], "allow_partial_joints_goal");
+  }
+}
+
+}  // namespace
+
 ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
                                 const std::string& where) {
   const Reader r(where, name);
@@ -190,6 +329,8 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
     if (!seen.insert(j).second) r.fail(node, "joint '" + j + "' is listed twice");
   }
 
+  s.iface = controller_interface(s.type);
+  const bool trajectory = s.kind == ControllerKind::Trajectory;
   // Keys: type, joint(s), pid, gains, one per joint; ros_control's extras are tolerated.
   for (const auto& kv : node) {
     const std::string k = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
@@ -197,8 +338,14 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
         seen.count(k) || k == "publish_rate") {
       continue;
     }
+    if (trajectory && (k == "constraints" || k == "state_publish_rate" ||
+                       k == "action_monitor_rate" || k == "stop_trajectory_duration" ||
+                       k == "allow_partial_joints_goal" || k == "velocity_ff")) {
+      continue;
+    }
     r.fail(kv.first, "unknown key '" + k + "'");
   }
+  if (trajectory) parse_trajectory_keys(r, node, s);
   if (!uses_pid(s.kind)) {
     if (node["pid"] || node["gains"]) r.fail(node, "an effort controller takes no gains");
     for (const auto& j : s.joints) {
@@ -217,6 +364,10 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
       if (!seen.count(k)) r.fail(kv.first, "'gains' names '" + k + "', not one of its joints");
     }
   }
+  bool any = has_common || gains;
+  for (const auto& j : s.joints) any = any || node[j];
+  // Position and velocity interfaces: the controller's gains may come from pid_gains instead.
+  if (!any && gains_optional(s.kind, s.iface)) return s;
   for (const auto& j : s.joints) {
     const YAML::Node own = node[j];
     const bool in_gains = gains && gains[j];
@@ -230,6 +381,8 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
       s.gains.push_back(r.gains(gains[j], "gains." + j, has_common ? &common : nullptr));
     } else if (has_common) {
       s.gains.push_back(common);
+    } else if (trajectory) {
+      r.fail(node, "no gains for joint '" + j + "' (give 'gains: {" + j + ": {p: ...}}')");
     } else {
       r.fail(node, "no gains for joint '" + j + "' (give 'pid: {p: ...}' or '" + j +
                        ": {pid: {p: ...}}')");
@@ -279,6 +432,31 @@ std::vector<ControllerSpec> parse_controllers_text(const std::string& yaml_text,
   return parse_controllers(root, names, where);
 }
 
+std::map<std::string, PidGains> parse_interface_gains(const YAML::Node& map,
+                                                      const std::string& where) {
+  std::map<std::string, PidGains> out;
+  if (!map || map.IsNull()) return out;
+  const Reader r(where, "pid_gains");
+  if (!map.IsMap()) r.fail(map, "needs a map {JOINT: {p: ..., i: ..., d: ...}, ...}");
+  for (const auto& kv : map) {
+    const std::string j = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
+    out[j] = r.gains(kv.second, j, nullptr);
+  }
+  return out;
+}
+
+void set_interface_gains(std::vector<ControllerSpec>& specs,
+                         const std::map<std::string, PidGains>& by_joint) {
+  for (ControllerSpec& s : specs) {
+    s.interface_gains.assign(s.joints.size(), std::nullopt);
+    if (s.iface == JointInterface::Effort) continue;
+    for (size_t k = 0; k < s.joints.size(); ++k) {
+      auto it = by_joint.find(s.joints[k]);
+      if (it != by_joint.end()) s.interface_gains[k] = it->second;
+    }
+  }
+}
+
 // ------------------------------------------------------------------ ControllerSet
 
 ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpec>& specs)
@@ -289,12 +467,20 @@ ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpe
       throw ControllerError("controller '" + s.name + "' is given twice");
     }
     if (s.kind == ControllerKind::JointState) continue;  // nothing to run
-    if (uses_pid(s.kind) && s.gains.size() != s.joints.size()) {
+    const bool optional = gains_optional(s.kind, s.iface);
+    if (uses_pid(s.kind) && s.gains.size() != s.joints.size() && !(optional && s.gains.empty())) {
       throw ControllerError("controller '" + s.name + "': gains for every joint needed");
     }
+    const bool trajectory = s.kind == ControllerKind::Trajectory;
     Ctl c;
     c.spec = s;
-    for (size_t k = 0; k < s.joints.size(); ++k) {
+    const size_t n = s.joints.size();
+    if (trajectory) {
+      c.spec.constraints.trajectory.resize(n, 0.0);
+      c.spec.constraints.goal.resize(n, 0.0);
+      c.spec.velocity_ff.resize(n, 0.0);
+    }
+    for (size_t k = 0; k < n; ++k) {
       const int i = model.joint_index(s.joints[k]);
       if (i < 1) {
         throw ControllerError("controller '" + s.name + "': joint '" + s.joints[k] +
@@ -307,9 +493,43 @@ ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpe
       }
       owner_[i] = static_cast<int>(ctl_.size());
       c.joint.push_back(i);
-      c.pid.emplace_back(uses_pid(s.kind) ? s.gains[k] : PidGains());
+      // The interface's PID: pid_gains, else the controller's own where it has no other use.
+      PidGains hw;
+      if (s.iface != JointInterface::Effort) {
+        const bool own = !s.gains.empty() && (!trajectory || s.iface == JointInterface::Position);
+        if (k < s.interface_gains.size() && s.interface_gains[k]) {
+          hw = *s.interface_gains[k];
+        } else if (own) {
+          hw = s.gains[k];
+        } else {
+          throw ControllerError(
+              "controller '" + s.name + "' (" + s.type + "): joint '" + s.joints[k] +
+              "' has no gains for its " + interface_name(s.iface) +
+              ": set /gazebo_ros_control/pid_gains/" + s.joints[k] + " {p: ..., i: ..., d: ...}" +
+              (trajectory ? std::string() : " or give the controller 'pid: {p: ...}'") +
+              " (the joint is driven through its effort by that PID)");
+        }
+      }
+      if (trajectory) {
+        c.pid.emplace_back(s.iface == JointInterface::Position ? PidGains() : s.gains[k]);
+        c.hw.emplace_back(hw);
+      } else if (s.iface != JointInterface::Effort) {
+        c.pid.emplace_back(hw);  // a forward command through the interface's PID
+        c.hw.emplace_back();
+      } else {
+        c.pid.emplace_back(uses_pid(s.kind) ? s.gains[k] : PidGains());
+        c.hw.emplace_back();
+      }
     }
     c.command.assign(c.joint.size(), 0.0);
+    if (trajectory) {
+      c.track.resize(n);
+      TrajectoryState& st = c.state;
+      for (auto* v : {&st.desired_q, &st.desired_v, &st.desired_a, &st.actual_q, &st.actual_v,
+                      &st.error_q, &st.error_v}) {
+        v->assign(n, 0.0);
+      }
+    }
     ctl_.push_back(std::move(c));
   }
 }
@@ -323,6 +543,9 @@ int ControllerSet::find(const std::string& name) const {
 
 std::string ControllerSet::set_command(int c, const double* values, size_t n) {
   Ctl& k = ctl_[c];
+  if (k.spec.kind == ControllerKind::Trajectory) {
+    return "controller '" + k.spec.name + "' takes trajectories (trajectory_msgs/JointTrajectory)";
+  }
   if (n != k.joint.size()) {
     return "controller '" + k.spec.name + "' takes " + std::to_string(k.joint.size()) + " value" +
            (k.joint.size() == 1 ? "" : "s") + ", got " + std::to_string(n);
@@ -351,8 +574,213 @@ double ControllerSet::position_error(int i, double target, double q) const {
   return target - q;
 }
 
-void ControllerSet::update(const State& x, double dt, VecX& tau) {
+// ---- trajectories
+
+namespace {
+
+// The segment of a track at time t (the last one starting at or before t, else the first).
+size_t segment_at(const std::vector<double>& t0, double t) {
+  const auto it = std::upper_bound(t0.begin(), t0.end(), t);
+  return it == t0.begin() ? 0 : static_cast<size_t>(it - t0.begin()) - 1;
+}
+
+}  // namespace
+
+void ControllerSet::sample(int c, int j, double t, double& q, double& v, double& a) const {
+  const Track& tr = ctl_[c].track[j];
+  if (tr.seg.empty()) {
+    q = v = a = 0;
+    return;
+  }
+  const size_t k = segment_at(tr.t0, t);
+  sample_spline(tr.seg[k], t - tr.t0[k], q, v, a);
+}
+
+void ControllerSet::hold(Ctl& c, int j, double q, double t) {
+  Track& tr = c.track[j];
+  tr.t0.assign(1, t);
+  tr.seg.assign(1, linear_spline(q, q, 0.0));
+}
+
+// ros_controllers' setHoldPosition: from the current desired state to a stop over
+// stop_trajectory_duration (decelerating to q + v T / 2), or at once where it is.
+void ControllerSet::stop(Ctl& c, double now) {
+  const double T = c.spec.stop_trajectory_duration;
+  for (size_t j = 0; j < c.track.size(); ++j) {
+    double q, v, a;
+    sample(static_cast<int>(&c - ctl_.data()), static_cast<int>(j), now, q, v, a);
+    Track& tr = c.track[j];
+    tr.t0.assign(1, now);
+    tr.seg.assign(
+        1, T > 0 ? quintic_spline(q, v, a, q + 0.5 * v * T, 0, 0, T) : linear_spline(q, q, 0.0));
+  }
+  c.state.end_time = now + T;
+}
+
+std::string ControllerSet::set_trajectory(int c, const TrajectoryCommand& cmd, double now) {
+  Ctl& k = ctl_[c];
+  const ControllerSpec& s = k.spec;
+  const std::string who = "controller '" + s.name + "'";
+  if (s.kind != ControllerKind::Trajectory) return who + " takes no trajectories";
+  if (!std::isfinite(now)) return who + ": no time";
+  if (cmd.points.empty()) {  // ros_controllers: an empty trajectory stops
+    stop(k, now);
+    k.state.status = TrajectoryStatus::Idle;
+    k.state.status_joint = -1;
+    return "";
+  }
+  const size_t m = cmd.joint_names.size();
+  if (m == 0) return who + ": the trajectory names no joints";
+  // Message joint -> controller joint.
+  std::vector<int> map(m, -1);
+  std::vector<bool> named(s.joints.size(), false);
+  for (size_t a = 0; a < m; ++a) {
+    for (size_t j = 0; j < s.joints.size(); ++j) {
+      if (s.joints[j] == cmd.joint_names[a]) map[a] = static_cast<int>(j);
+    }
+    if (map[a] < 0) return who + ": joint '" + cmd.joint_names[a] + "' is not one of its joints";
+    if (named[map[a]]) return who + ": joint '" + cmd.joint_names[a] + "' is named twice";
+    named[map[a]] = true;
+  }
+  if (m != s.joints.size() && !s.allow_partial_joints_goal) {
+    return who + ": the trajectory names " + std::to_string(m) + " of its " +
+           std::to_string(s.joints.size()) + " joints (allow_partial_joints_goal is false)";
+  }
+  // The points: sizes, finite values, strictly increasing times.
+  const bool has_v = !cmd.points[0].velocities.empty();
+  const bool has_a = !cmd.points[0].accelerations.empty();
+  double last = -1;
+  for (size_t p = 0; p < cmd.points.size(); ++p) {
+    const auto& pt = cmd.points[p];
+    const std::string at = who + ": point " + std::to_string(p);
+    if (pt.positions.size() != m) {
+      return at + " has " + std::to_string(pt.positions.size()) + " positions for " +
+             std::to_string(m) + " joints";
+    }
+    if (pt.velocities.size() != (has_v ? m : 0) || pt.accelerations.size() != (has_a ? m : 0)) {
+      return at +
+             ": velocities and accelerations need one value per joint in every point, or "
+             "none in any";
+    }
+    if (has_a && !has_v) return at + ": accelerations without velocities";
+    for (size_t a = 0; a < m; ++a) {
+      if (!std::isfinite(pt.positions[a]) || (has_v && !std::isfinite(pt.velocities[a])) ||
+          (has_a && !std::isfinite(pt.accelerations[a]))) {
+        return at + ": non-finite value for '" + cmd.joint_names[a] + "'";
+      }
+    }
+    if (!std::isfinite(pt.time_from_start) || !(pt.time_from_start > last)) {
+      return at + ": time_from_start " + std::to_string(pt.time_from_start) +
+             " is not after the point before";
+    }
+    last = pt.time_from_start;
+  }
+  const double start = std::isfinite(cmd.start) ? cmd.start : now;
+  const double t_switch = std::max(now, start);
+  size_t first = 0;  // the first point after the switch
+  while (first < cmd.points.size() && start + cmd.points[first].time_from_start <= t_switch) {
+    ++first;
+  }
+  if (first == cmd.points.size()) {
+    return who + ": every point lies at or before the current time (" + std::to_string(now) +
+           " s); nothing to follow";
+  }
+  for (size_t a = 0; a < m; ++a) {
+    const int j = map[a];
+    const int i = k.joint[j];
+    double q0, v0, a0;
+    sample(c, j, t_switch, q0, v0, a0);
+    // A continuous joint takes the way round nearest to where it stands.
+    double offset = 0;
+    if (model_.joints[i].angular() &&
+        !(std::isfinite(model_.lower[i]) && std::isfinite(model_.upper[i]))) {
+      const double two_pi = 2 * M_PI;
+      offset = two_pi * std::round((q0 - cmd.points[first].positions[a]) / two_pi);
+    }
+    Track& tr = k.track[j];
+    // Keep the old segments from the one at `now` up to the switch.
+    size_t from = segment_at(tr.t0, now);
+    size_t to =
+        static_cast<size_t>(std::lower_bound(tr.t0.begin(), tr.t0.end(), t_switch) - tr.t0.begin());
+    to = std::max(to, from);
+    tr.t0.erase(tr.t0.begin() + to, tr.t0.end());
+    tr.seg.erase(tr.seg.begin() + to, tr.seg.end());
+    tr.t0.erase(tr.t0.begin(), tr.t0.begin() + from);
+    tr.seg.erase(tr.seg.begin(), tr.seg.begin() + from);
+    // The bridge from the current desired state, then point to point.
+    double tp = t_switch, qp = q0, vp = v0, ap = a0;
+    for (size_t p = first; p < cmd.points.size(); ++p) {
+      const auto& pt = cmd.points[p];
+      const double t1 = start + pt.time_from_start, T = t1 - tp;
+      const double q1 = pt.positions[a] + offset;
+      const double v1 = has_v ? pt.velocities[a] : 0.0;
+      const double a1 = has_a ? pt.accelerations[a] : 0.0;
+      Spline sp;
+      if (p == first) {
+        sp = has_a ? quintic_spline(qp, vp, ap, q1, v1, a1, T) : cubic_spline(qp, vp, q1, v1, T);
+      } else if (has_a) {
+        sp = quintic_spline(qp, vp, ap, q1, v1, a1, T);
+      } else if (has_v) {
+        sp = cubic_spline(qp, vp, q1, v1, T);
+      } else {
+        sp = linear_spline(qp, q1, T);
+      }
+      sp.ends_trajectory = p + 1 == cmd.points.size();
+      tr.t0.push_back(tp);
+      tr.seg.push_back(sp);
+      tp = t1, qp = q1, vp = v1, ap = a1;
+    }
+  }
+  double end = start + cmd.points.back().time_from_start;
+  for (size_t j = 0; j < k.track.size(); ++j) {
+    if (!named[j] && !k.track[j].seg.empty()) {
+      const Spline& b = k.track[j].seg.back();
+      end = std::max(end, k.track[j].t0.back() + b.T);
+    }
+  }
+  k.state.end_time = end;
+  k.state.status = TrajectoryStatus::Active;
+  k.state.status_joint = -1;
+  return "";
+}
+
+// ros_controllers' checks: a joint beyond its `trajectory` tolerance before the end stops the
+// controller; after the end, every joint within its `goal` tolerance and below the stopped
+// velocity is success, and still outside goal_time after the end is a failure.
+void ControllerSet::check_tolerances(Ctl& c, double t) {
+  TrajectoryState& st = c.state;
+  if (st.status != TrajectoryStatus::Active) return;
+  const TrajectoryConstraints& tol = c.spec.constraints;
+  const size_t n = c.joint.size();
+  if (t < st.end_time) {
+    for (size_t j = 0; j < n; ++j) {
+      if (tol.trajectory[j] > 0 && std::abs(st.error_q[j]) > tol.trajectory[j]) {
+        st.status = TrajectoryStatus::PathToleranceViolated;
+        st.status_joint = static_cast<int>(j);
+        stop(c, t);
+        return;
+      }
+    }
+    return;
+  }
+  for (size_t j = 0; j < n; ++j) {
+    const bool off = (tol.goal[j] > 0 && std::abs(st.error_q[j]) > tol.goal[j]) ||
+                     (tol.stopped_velocity_tolerance > 0 &&
+                      std::abs(st.actual_v[j]) > tol.stopped_velocity_tolerance);
+    if (off) {
+      if (tol.goal_time > 0 && t > st.end_time + tol.goal_time) {
+        st.status = TrajectoryStatus::GoalToleranceViolated;
+        st.status_joint = static_cast<int>(j);
+      }
+      return;
+    }
+  }
+  st.status = TrajectoryStatus::Succeeded;
+}
+
+void ControllerSet::update(const State& x, double t, double dt, VecX& tau) {
   for (Ctl& c : ctl_) {
+    const bool trajectory = c.spec.kind == ControllerKind::Trajectory;
     for (size_t j = 0; j < c.joint.size(); ++j) {
       const int i = c.joint[j];
       const int iv = model_.idx_v(i);
@@ -367,8 +795,39 @@ void ControllerSet::update(const State& x, double dt, VecX& tau) {
           u = c.pid[j].compute(position_error(i, c.command[j], x.q[i - 1]), dt);
           break;
         case ControllerKind::Velocity:
+        case ControllerKind::GroupVelocity:
           u = c.pid[j].compute(c.command[j] - x.v[iv], dt);
           break;
+        case ControllerKind::Trajectory: {
+          TrajectoryState& st = c.state;
+          double qd, vd, ad;
+          const Track& tr = c.track[j];
+          const double q = x.q[i - 1], v = x.v[iv];
+          if (tr.seg.empty()) {  // never reset: where it stands
+            qd = q, vd = ad = 0;
+          } else {
+            const size_t k = segment_at(tr.t0, t);
+            sample_spline(tr.seg[k], t - tr.t0[k], qd, vd, ad);
+          }
+          const double eq = position_error(i, qd, q), ev = vd - v;
+          st.desired_q[j] = qd, st.desired_v[j] = vd, st.desired_a[j] = ad;
+          st.actual_q[j] = q, st.actual_v[j] = v;
+          st.error_q[j] = eq, st.error_v[j] = ev;
+          switch (c.spec.iface) {
+            case JointInterface::Effort:
+              u = c.pid[j].compute(eq, ev, dt);
+              break;
+            case JointInterface::Velocity: {
+              const double vcmd = c.spec.velocity_ff[j] * vd + c.pid[j].compute(eq, ev, dt);
+              u = c.hw[j].compute(vcmd - v, dt);
+              break;
+            }
+            case JointInterface::Position:
+              u = c.hw[j].compute(eq, dt);
+              break;
+          }
+          break;
+        }
         case ControllerKind::JointState:
           break;
       }
@@ -377,16 +836,33 @@ void ControllerSet::update(const State& x, double dt, VecX& tau) {
       if (std::isfinite(lim) && lim > 0) u = std::min(lim, std::max(-lim, u));
       tau[iv] = u;
     }
+    if (trajectory) {
+      c.state.time = t;
+      check_tolerances(c, t);
+    }
   }
 }
 
 void ControllerSet::reset(const State& x) {
   for (Ctl& c : ctl_) {
+    const bool trajectory = c.spec.kind == ControllerKind::Trajectory;
     for (size_t j = 0; j < c.joint.size(); ++j) {
       c.pid[j].reset();
+      c.hw[j].reset();
       const bool position =
           c.spec.kind == ControllerKind::GroupPosition || c.spec.kind == ControllerKind::Position;
       c.command[j] = position ? x.q[c.joint[j] - 1] : 0.0;
+      if (trajectory) {
+        hold(c, static_cast<int>(j), x.q[c.joint[j] - 1], 0.0);
+        c.state.desired_q[j] = c.state.actual_q[j] = x.q[c.joint[j] - 1];
+        c.state.desired_v[j] = c.state.desired_a[j] = c.state.actual_v[j] = 0;
+        c.state.error_q[j] = c.state.error_v[j] = 0;
+      }
+    }
+    if (trajectory) {
+      c.state.status = TrajectoryStatus::Idle;
+      c.state.status_joint = -1;
+      c.state.time = c.state.end_time = 0;
     }
   }
 }

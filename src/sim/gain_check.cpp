@@ -18,6 +18,8 @@ std::vector<std::string> gain_stability_warnings(const Model& model, const State
   char line[512];
   for (const ControllerSpec& s : specs) {
     if (!uses_pid(s.kind) || s.gains.size() != s.joints.size()) continue;
+    // A velocity trajectory controller's gains turn a position error into a velocity.
+    if (s.kind == ControllerKind::Trajectory && s.iface != JointInterface::Effort) continue;
     const bool velocity = s.kind == ControllerKind::Velocity;
     for (size_t k = 0; k < s.joints.size(); ++k) {
       const int i = model.joint_index(s.joints[k]);

@@ -308,7 +308,7 @@ const VecX& Simulator::step_forces() {
   const VecX* tau = &command_;
   if (controllers_) {
     actuation_ = command_;
-    controllers_->update(state_, config_.dt, actuation_);
+    controllers_->update(state_, time_, config_.dt, actuation_);
     tau = &actuation_;
   }
   if (wrenches_.empty()) return *tau;
