@@ -100,6 +100,7 @@ struct ConstraintOptions {
   double bilateral_erp = 0.2;         ///< velocity-level bilateral rows: b = -bilateral_erp phi / h
   double restitution = 0;             ///< of the ground and the contact spheres (the larger counts)
   double restitution_velocity = 0.2;  ///< m/s: slower impacts do not bounce
+  double max_correction_velocity = 0.5;  ///< m/s: a contact's push-out speed at most (RowParams)
   ContactSolver solver = ContactSolver::PGS;  ///< pgs or active_set (solver.h)
 };
 
