@@ -91,6 +91,10 @@ struct ControllerSpec {
   ControllerKind kind = ControllerKind::GroupEffort;
   std::vector<std::string> joints;  ///< one for single-joint types
   std::vector<PidGains> gains;      ///< per joint (PID types), else empty
+  /// Where it was read ("file:line" of its entry; "" when built in code), and each joint's
+  /// entry: binding errors (ControllerSet) name them.
+  std::string where;
+  std::vector<std::string> joint_where;
 };
 
 /// The kind of a type name; throws ControllerError for a type this simulator does not run.
