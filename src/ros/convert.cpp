@@ -118,8 +118,13 @@ std::string check_torque_command(const se3::Model& m, const JointTable& joints,
     const se3::Vec6 w = from_wrench(msg.base_wrench);
     if (!w.allFinite()) return "non-finite base wrench";
     if (w.head<3>().norm() > max_wrench || w.tail<3>().norm() > max_wrench) {
-      return "base wrench (|torque| " + se3::num(w.head<3>().norm()) + ", |force| " +
-             se3::num(w.tail<3>().norm()) + ") exceeds ~max_wrench " + se3::num(max_wrench);
+      // The norm scaled by the largest component: 1e300 squared would print as inf.
+      auto size = [](const se3::Vec3& v) {
+        const double big = v.cwiseAbs().maxCoeff();
+        return big > 0 ? big * (v / big).norm() : 0.0;
+      };
+      return "base wrench (|torque| " + se3::num(size(w.head<3>())) + ", |force| " +
+             se3::num(size(w.tail<3>())) + ") exceeds ~max_wrench " + se3::num(max_wrench);
     }
     out.has_base_wrench = true;
     out.base_wrench = w;
@@ -164,7 +169,8 @@ void fill_chain_state(const se3::Model& m, const sensor_msgs::JointState& js, co
 
 TfTree tf_tree(const se3::Model& m, const std::string& world_frame) {
   TfTree t;
-  t.world_edge = m.links.empty() || m.links[0].name != world_frame;
+  // No links (the empty robot of a scene of objects alone): no robot frame to hang on the world.
+  t.world_edge = !m.links.empty() && m.links[0].name != world_frame;
   for (size_t k = 1; k < m.links.size(); ++k) {
     const se3::LinkFrame& L = m.links[k];
     if (L.parent < 0) continue;  // a model built in code without the URDF tree

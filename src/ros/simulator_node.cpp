@@ -346,7 +346,7 @@ void SimulatorNodeImpl::configure() {
     // renderer finds a description and frames the objects' markers.
     const std::string text = !urdf_xml.empty() ? urdf_xml
                              : objects_only || scene_.robot_path.compare(0, 6, "chain:") == 0
-                                 ? se3::model_to_urdf(m, &chain)
+                                 ? se3::model_to_urdf(m, objects_only ? nullptr : &chain)
                                  : read_file(scene_.robot_path);
     nh_.setParam("robot_description", text);
   }
