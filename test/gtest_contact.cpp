@@ -126,6 +126,84 @@ TEST(Contact, BoxOnAnInclineSticksBelowAtanMuAndSlidesAbove) {
   }
 }
 
+// A box spawned with its bottom 0.3 m under the ground (issue 35): the position correction
+// asked for erp 0.3 m / dt = 60 m/s and launched it to 136 m. It rises at no more than
+// max_correction_velocity, lands and rests on the ground, and the start is reported.
+TEST(Contact, DeepPenetrationRisesSlowlyAndRests) {
+  const Scene scene = parse_scene(
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "ground: {normal: [0, 0, 1]}\n"
+      "objects:\n"
+      "  - {name: box, shape: {box: [1, 1, 1]}, mass: 1, pose: {position: [0, 0, 0.2]}}\n",
+      kScenes, "deep.yaml");
+  auto sim = make_simulator(scene);
+  const std::string warning = sim->deep_penetration_warning();
+  EXPECT_NE(warning.find("'box'"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("0.3 m deep"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("max_correction_velocity"), std::string::npos) << warning;
+  double fastest = 0, highest = 0;
+  for (int k = 0; k < 3000; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    const ObjectState& b = sim->objects()[0];
+    fastest = std::max(fastest, b.twist.tail<3>().norm());
+    highest = std::max(highest, b.pose.p.z());
+  }
+  const ObjectState& b = sim->objects()[0];
+  std::printf("deep start: fastest %.3g m/s, highest centre %.4g m, final z %.6g m\n", fastest,
+              highest, b.pose.p.z());
+  EXPECT_LT(fastest, 0.5 * 1.01);  // max_correction_velocity
+  EXPECT_LT(highest, 0.5 + 0.5 * 0.5 / (2 * kG) + 1e-3);
+  EXPECT_NEAR(b.pose.p.z(), 0.5, 2e-3);  // resting on the ground
+  EXPECT_LT(b.twist.norm(), 1e-3);
+  // A scene that starts in resting contact says nothing.
+  const Scene rest = parse_scene(
+      "ground: true\ndt: 0.001\n"
+      "objects: [{name: box, shape: {box: [1, 1, 1]}, mass: 1, pose: {position: [0, 0, 0.5]}}]\n",
+      kScenes, "rest.yaml");
+  EXPECT_EQ(make_simulator(rest)->deep_penetration_warning(), "");
+}
+
+// A 2 cm ball at 1000 m/s toward a 1 cm wall passes through it between two steps (contact is
+// found at the steps' ends: here at x = 1 and 2, the wall at 1.5); the simulator counts each step
+// in which an object moved farther than its own size and describes the first (issue 35).
+TEST(Contact, FastSmallObjectIsReportedAsPossiblyTunnelling) {
+  const Scene scene = parse_scene(
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects:\n"
+      "  - {name: wall, shape: {box: [0.01, 1, 1]}, pose: {position: [1.5, 0, 0]}}\n"
+      "  - {name: ball, shape: {sphere: 0.01}, mass: 0.01, twist: [0, 0, 0, 1000, 0, 0]}\n",
+      kScenes, "tunnel.yaml");
+  auto sim = make_simulator(scene);
+  EXPECT_EQ(sim->fast_steps(), 0u);
+  ASSERT_EQ(sim->step_n(5), 5) << sim->failure();
+  EXPECT_GT(sim->objects()[1].pose.p.x(), 4.9);  // through the wall
+  EXPECT_EQ(sim->fast_steps(), 5u);
+  const std::string w = sim->fast_step_warning();
+  EXPECT_NE(w.find("object 'ball' moved 1 m in one step"), std::string::npos) << w;
+  EXPECT_NE(w.find("its size (0.02 m)"), std::string::npos) << w;
+  EXPECT_NE(w.find("tunnelling"), std::string::npos) << w;
+  sim->reset();
+  EXPECT_EQ(sim->fast_steps(), 0u);
+  EXPECT_EQ(sim->fast_step_warning(), "");
+  // In the report (--json) too; a slow ball is not counted.
+  const std::string path = testing::TempDir() + "/tunnel.yaml";
+  {
+    std::ofstream out(path);
+    out << "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\nobjects:\n"
+           "  - {name: wall, shape: {box: [0.01, 1, 1]}, pose: {position: [1.5, 0, 0]}}\n"
+           "  - {name: ball, shape: {sphere: 0.01}, mass: 0.01, twist: [0, 0, 0, 1000, 0, 0]}\n"
+           "  - {name: slow, shape: {sphere: 0.01}, mass: 0.01, pose: {position: [0, 2, 0]},"
+           " twist: [0, 0, 0, 10, 0, 0]}\n";
+  }
+  SimulateOptions o;
+  o.scene = path;
+  o.duration = 0.01;
+  const SimulateResult r = simulate_headless(o);
+  EXPECT_EQ(r.fast_steps, 10u);
+  EXPECT_NE(simulate_result_json(r).find("\"fast_steps\": 10"), std::string::npos);
+  std::remove(path.c_str());
+}
+
 TEST(Contact, RestingBoxStaysAndFreeObjectsKeepMomentumInFlight) {
   auto sim = ground_scene("{mu: 0.8}");
   SceneObject rest = free_object("rest", make_box(Vec3(0.3, 0.2, 0.1)), 3.0, Vec3(0, 0, 0.05));

@@ -226,6 +226,26 @@ TEST(ControllerSet, BindsJointsAndRefusesBadCommands) {
   }
 }
 
+// Binding errors name the file and line of the controller's joint (they had neither).
+TEST(ControllerSet, BindingErrorsNameTheFileAndLine) {
+  auto sim = panda();
+  const auto specs = parse_controllers_text(
+      "arm:\n"
+      "  type: effort_controllers/JointGroupEffortController\n"
+      "  joints:\n"
+      "    - panda_joint1\n"
+      "    - no_such_joint\n",
+      {}, "ctl.yaml");
+  try {
+    ControllerSet set(sim->model(), specs);
+    ADD_FAILURE() << "an unknown joint was bound";
+  } catch (const ControllerError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("ctl.yaml:5: controller 'arm': joint 'no_such_joint'", 0),
+              0u)
+        << e.what();
+  }
+}
+
 // ------------------------------------------------------------------ in the Simulator
 
 TEST(Controllers, PositionControllerReachesAndHoldsItsTargetsUnderGravity) {

@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/lie.h", "lie"},
     {"lie/simd.h", "lie"},
+    {"se3_sim/format.h", "lie"},  // numbers in messages; depends on nothing
     {"se3_sim/model.h", "model"},
     {"se3_sim/limits.h", "model"},
     {"se3_sim/geometry.h", "geometry"},

@@ -565,6 +565,45 @@ TEST(Se3DynSilent, ADivergedRunSaysSoOnStderrAndInJson) {
   EXPECT_NE(ok.out.find("\"diverged\": false, \"status\": null"), std::string::npos) << ok.out;
 }
 
+// Issue 35: a scene of objects alone renders them (it read the URDF file ''), and a shipped
+// scene's relative energy drift is not divided by a vanishing T(0) (3.9e12 on solo12_meshes,
+// 5.7e13 on a UR5); self-contacts count in penetration_max (it was null).
+TEST(Se3DynSilent, RobotlessSceneRendersAndDriftHasASaneScale) {
+  const std::string png = testing::TempDir() + "/objects_only.png";
+  std::remove(png.c_str());
+  const RunResult render =
+      se3_dyn("render --scene " + kSource + "/config/scenes/ball_on_table.yaml --out " + png);
+  EXPECT_EQ(render.code, 0) << render.err;
+  EXPECT_EQ(render.err.find("URDF"), std::string::npos) << render.err;
+  EXPECT_FALSE(read(png).empty());
+  std::remove(png.c_str());
+  const RunResult ur5 = se3_dyn("simulate --scene " + kSource +
+                                "/config/scenes/ur5_self_collision.yaml --duration 0.05 --json");
+  ASSERT_EQ(ur5.code, 0) << ur5.err;
+  const auto value = [](const std::string& json, const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? std::nan("")
+                                   : std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+  };
+  EXPECT_LT(value(ur5.out, "energy_drift_rel"), 1.0) << ur5.out;
+  EXPECT_GE(value(ur5.out, "penetration_max"), 0.0) << ur5.out;  // not null
+}
+
+// A free object whose inertia underflows (a 1e-300 m box) is an error naming the scene line
+// and the object (it was "link 'speck': a free-floating base ..."), with numbers as %g.
+TEST(Se3DynSilent, SingularObjectIsNamedWithItsLine) {
+  const std::string scene =
+      temp_file("speck.yaml",
+                "ground: true\nobjects:\n"
+                "  - {name: speck, shape: {box: [1e-300, 1e-300, 1e-300]}, mass: 1}\n");
+  const RunResult r = se3_dyn("simulate --scene " + scene + " --duration 0.01");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("speck.yaml:3: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("object 'speck'"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("link"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 400u) << r.err;
+}
+
 // `eval` printed NaN with exit code 0 when finite inputs overflowed (v = 1e200).
 TEST(Se3DynSilent, EvalRefusesResultsThatOverflow) {
   const std::string urdf = kSource + "/data/robots/double_pendulum_simple.urdf";

@@ -199,6 +199,10 @@ TEST(Convert, TorqueCommandsAreCheckedJointByJoint) {
   EXPECT_EQ(out.base_wrench[4], 20);
   w[4] = 1e300;  // finite, and it would end the simulation
   EXPECT_NE(check({}, {}, true, w).find("exceeds ~max_wrench"), std::string::npos);
+  // Numbers in messages as %g: std::to_string(1e300) wrote all 301 digits.
+  EXPECT_NE(check({}, {}, true, w).find("|force| 1e+300)"), std::string::npos)
+      << check({}, {}, true, w);
+  EXPECT_LT(check({}, {}, true, w).size(), 120u);
   w[4] = std::nan("");
   EXPECT_NE(check({}, {}, true, w).find("non-finite base wrench"), std::string::npos);
   // A joint without a URDF effort limit (chain:N) is bounded by ~max_effort.

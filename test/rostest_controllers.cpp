@@ -11,6 +11,7 @@
 #include <std_srvs/Trigger.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -103,6 +104,14 @@ TEST(Controllers, PositionControllerReachesItsTargetsAndHoldsThem) {
   }
   // Under gravity the shoulder works: its effort in joint_states is the controller's.
   EXPECT_GT(std::abs(j["panda_joint2"].e), 1.0);
+  // The arm started at rest (T(0) = 0): the relative energy figures are measured against
+  // M |g| L and the largest kinetic energy, not T(0) (they read 1e12 and more).
+  wait(0.1);
+  std::lock_guard<std::mutex> l(g->mu);
+  std::printf("energy_drift_rel %g, energy_balance_rel %g\n", g->stats.energy_drift_rel,
+              g->stats.energy_balance_rel);
+  EXPECT_LT(g->stats.energy_drift_rel, 10.0);
+  EXPECT_LT(g->stats.energy_balance_rel, 1.0);
 }
 
 TEST(Controllers, EffortControllerCommandShowsInJointStatesEffort) {

@@ -11,6 +11,7 @@
 //     (a gap g > 0 may close within the step, b = -g / h; a penetration beyond `slop` is pushed
 //     out at the rate erp (depth - slop) / h; a bilateral error phi is removed at -erp phi / h)
 //     and restitution (a normal approaching at v_n < -restitution_velocity asks for -e v_n);
+//     a contact's push-out is at most max_correction_velocity (no energy from deep penetration);
 //   - the friction coefficient (normal rows) and the id of what produced it.
 // Friction is the elliptic (isotropic, circular) Coulomb cone: two tangent rows per contact whose
 // impulses (p_t1, p_t2) must stay in the disc of radius mu p_n. A contact's friction rows are
@@ -44,6 +45,9 @@ struct RowParams {
   double margin = 0.01;        ///< m or rad: limits closer than this (plus |rate| h) get a row
   double restitution_velocity = 0.2;  ///< m/s: slower impacts do not bounce (resting contact)
   double limit_restitution = 0;       ///< of the joint limits: J v+ >= -e J v on an impact
+  /// m/s: the largest separation velocity a contact's position correction asks for (a deep
+  /// penetration is pushed out at this speed over several steps, not launched)
+  double max_correction_velocity = 0.5;
 };
 
 /// One system's kinematics for Jacobian rows: body poses and the world axis of every velocity

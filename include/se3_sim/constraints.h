@@ -103,6 +103,7 @@ struct ConstraintOptions {
   /// Of the joint limits: an impact faster than restitution_velocity leaves at e times its speed
   /// (the velocity-level rows, and the located impacts of another integrator).
   double limit_restitution = 0;
+  double max_correction_velocity = 0.5;  ///< m/s: a contact's push-out speed at most (RowParams)
   ContactSolver solver = ContactSolver::PGS;  ///< pgs or active_set (solver.h)
 };
 

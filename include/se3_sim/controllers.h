@@ -141,6 +141,10 @@ struct ControllerSpec {
   std::vector<double> velocity_ff;  ///< per joint (velocity flavour)
   double state_publish_rate = 50, action_monitor_rate = 20, stop_trajectory_duration = 0;
   bool allow_partial_joints_goal = false;
+  /// Where it was read ("file:line" of its entry; "" when built in code), and each joint's
+  /// entry: binding errors (ControllerSet) name them.
+  std::string where;
+  std::vector<std::string> joint_where;
 };
 
 /// The kind of a type name; throws ControllerError for a type this simulator does not run, naming

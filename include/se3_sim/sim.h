@@ -2,6 +2,7 @@
 // forces, effort limits and a divergence guard, and the headless run behind `se3_dyn simulate`.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -171,6 +172,17 @@ struct GuardOptions {
   int energy_check_every = 8;
 };
 
+/// m: the smallest length of the gravity energy scale (Simulator::energy_scale0).
+constexpr double kMinEnergyLength = 0.1;
+
+/// The scale of a run's relative energy drift: max(energy_scale0, the largest kinetic energy
+/// reached, T_max). Drift relative to this stays meaningful when the run starts at rest
+/// (T(0) = 0); NaN when it is 0 (nothing with mass moves and no gravity).
+inline double energy_drift_scale(double scale0, double T_max) {
+  const double s = std::max(scale0, T_max);
+  return s > 0 ? s : std::numeric_limits<double>::quiet_NaN();
+}
+
 struct SimConfig {
   std::string integrator = "rkmk4";
   double dt = 1e-3;
@@ -282,6 +294,17 @@ class Simulator {
   double penetration() const { return penetration_; }
   /// Deepest contact penetration at the end of any step since the last reset (m, >= 0).
   double penetration_max() const { return penetration_max_; }
+  /// At the current state: "" or one line naming the deepest contact that is deeper than the
+  /// margin and than one step of position correction removes at max_correction_velocity (such
+  /// a contact is pushed out at that speed over several steps: a scene that starts so is
+  /// probably wrong).
+  std::string deep_penetration_warning();
+  /// Steps since the last reset in which a free object moved farther than its smallest extent
+  /// (counted once per object and step): contact is found at the step's end positions only, so
+  /// such an object may pass through a thin one (tunnelling). The first is described by
+  /// fast_step_warning() ("" when none).
+  std::uint64_t fast_steps() const { return fast_steps_; }
+  const std::string& fast_step_warning() const { return fast_step_warning_; }
 
   // ---- stepping
   /// One step of dt. On divergence returns false, rolls the state back to the last good one
@@ -326,6 +349,11 @@ class Simulator {
   Vec3 center_of_mass();
   /// Initial kinetic energy (after the last reset).
   double initial_kinetic_energy() const { return T0_; }
+  /// The energy a relative energy drift is measured against, from the initial state:
+  /// max(T(0), M |g| L), M the robot's mass, L the largest distance of a body origin from its
+  /// centre of mass (at least kMinEnergyLength). A run's scale is the larger of this and the
+  /// largest kinetic energy it reached (energy_drift_scale); 0 for a massless robot.
+  double energy_scale0() const { return energy_scale0_; }
   /// Work done on the system since the last reset by the commanded forces and the joint damping
   /// and friction (gravity is in the potential), J: per step the trapezoidal rule on the power
   /// (command + passive forces) . v at the step's ends, so O(dt^2) accurate. The energy drift
@@ -365,7 +393,9 @@ class Simulator {
     int index = 0;  ///< into object_specs_ / objects_
     std::unique_ptr<Model> model;
     State initial;
+    double size = 0;  ///< smallest extent of its shape (m)
   };
+  void note_fast_step(size_t j, double moved);
   void reset_objects();
   /// The constraint system the step needs (the scene's, or an empty one for free objects).
   void rebuild_constraints();
@@ -392,6 +422,8 @@ class Simulator {
   bool contacts_fresh_ = false;   ///< collision_data_ is at the current state
   ConstraintSpec spec_;           ///< as set_constraints got it
   double penetration_ = 0, penetration_max_ = 0;
+  std::uint64_t fast_steps_ = 0;
+  std::string fast_step_warning_;
   std::unique_ptr<Stepper> stepper_;
   std::unique_ptr<ConstraintSystem> constraints_;
   std::unique_ptr<ConstraintSystem> constraints_start_;  ///< as set, to restart from on reset
@@ -411,7 +443,7 @@ class Simulator {
   std::uint64_t last_checked_steps_ = 0;
   int steps_to_energy_check_ = 1;  ///< the energy is checked on the step that takes it to 0
   std::string failure_;
-  double T0_ = 0, U0_ = 0, E_ref_ = 1;
+  double T0_ = 0, U0_ = 0, E_ref_ = 1, energy_scale0_ = 0;
   double W_ = 0, W_checked_ = 0;  ///< work(), and its value at last_checked_
   /// Joints with damping (c = d) and with friction (c = f): the terms of passive_power().
   struct PassiveJoint {
@@ -466,10 +498,11 @@ struct SimulateResult {
   double sim_s = 0;   ///< simulated time reached
   double wall_s = 0;  ///< wall time of the steps only (diagnostics and output excluded)
   std::uint64_t steps = 0;
-  /// max |E(t) - E(0)| / T(0), potential measured from the initial configuration (damping and
-  /// friction count as drift). When T(0) = 0 the scale is max_t T(t) instead; NaN if still 0.
+  /// max |E(t) - E(0)| / S, potential measured from the initial configuration (damping and
+  /// friction count as drift), S = energy_drift_scale: max(T(0), M |g| L, max_t T(t)) (a run
+  /// from rest is not divided by T(0) = 0); NaN if S = 0.
   double energy_drift_rel = std::numeric_limits<double>::quiet_NaN();
-  /// max |E(t) - E(0) - W(t)| / T(0) (same scale): the drift alone, W the work of commands,
+  /// max |E(t) - E(0) - W(t)| / S (same scale): the drift alone, W the work of commands,
   /// damping and friction (Simulator::work); energy_drift_rel counts dissipation as drift.
   double energy_balance_rel = std::numeric_limits<double>::quiet_NaN();
   /// max |h(t) - h(0)| / |h(0)| (world-frame spatial momentum); free base and zero gravity only.
@@ -498,6 +531,9 @@ struct SimulateResult {
   /// Deepest contact penetration over the run (m), Simulator::penetration_max(); NaN (null) for
   /// a scene without contact (no objects, no ground, no contact points).
   double penetration_max = std::numeric_limits<double>::quiet_NaN();
+  /// Simulator::fast_steps(): object-steps that moved farther than the object's size (possible
+  /// tunnelling; the first is described in a warning on stderr).
+  std::uint64_t fast_steps = 0;
 };
 
 /// Runs a scene or model headless with zero commanded torques (a model and a scene together: the
@@ -506,7 +542,7 @@ struct SimulateResult {
 /// built or stepped); a divergence ends the run early with diverged = true.
 SimulateResult simulate_headless(const SimulateOptions& options);
 /// One-line JSON object of the `simulate --json` keys (docs/design.md; NaN printed as null),
-/// "penetration_max", "objects" (scenes with objects: {"NAME": {"position": [x,y,z],
+/// "penetration_max", "fast_steps", "objects" (scenes with objects: {"NAME": {"position": [x,y,z],
 /// "orientation": [x,y,z,w], "twist": [wx,wy,wz,vx,vy,vz]}}), and "diverged" (true/false) and
 /// "status" (why the run ended early, or null).
 std::string simulate_result_json(const SimulateResult& r);

@@ -615,7 +615,10 @@ void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts
     rows.mu[n] = std::max(objects[c.a].mu, objects[c.b].mu);
     const double g = -c.depth;
     rows.gap[n] = g;
-    double ref = gap_reference(g, h, p);
+    // A penetration is removed at erp per step, but no faster than max_correction_velocity: the
+    // push-out velocity stays in the bodies after they separate, so a deep start (a box spawned
+    // 0.3 m into the ground asked for 60 m/s at dt = 1 ms) would otherwise launch them.
+    double ref = std::min(gap_reference(g, h, p), std::max(0.0, p.max_correction_velocity));
     const double e = std::max(objects[c.a].restitution, objects[c.b].restitution);
     if (e > 0) {  // an impact within this step bounces: its velocity reversed, times e
       const double vn = rows.J.row(n).dot(vfree);

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
+#include "se3_sim/format.h"
 #include "se3_sim/integrate.h"
 
 namespace se3 {
@@ -386,8 +387,8 @@ class RkmkStepper final : public Stepper {
         first_stage_known_ = true;  // stage 1 sits at x, which has not moved
         if (h < opt_.h_min) {
           info.ok = false;
-          info.reason = "adaptive step size fell below h_min = " + std::to_string(opt_.h_min) +
-                        " (error " + std::to_string(err) + ")";
+          info.reason = "adaptive step size fell below h_min = " + num(opt_.h_min) + " (error " +
+                        num(err) + ")";
           break;
         }
       }

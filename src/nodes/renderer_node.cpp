@@ -70,7 +70,7 @@ class RendererNode {
   RendererNode() : pnh_("~"), it_(nh_), tf_listener_(tf_buffer_) {
     pnh_.param("rate", rate_, 30.0);
     if (!(rate_ > 0) || !finite(rate_) || rate_ > 120) {
-      ROS_WARN("renderer: ~rate %.3f out of (0, 120]; using 30", rate_);
+      ROS_WARN("renderer: ~rate %g out of (0, 120]; using 30", rate_);
       rate_ = 30;
     }
     rn::Camera cam;

@@ -82,7 +82,7 @@ void Renderer::draw_overlay(const Overlay& ov) {
   int n = 0;
   if (std::isfinite(ov.sim_time)) std::snprintf(lines[n++], 128, "sim time  %9.3f s", ov.sim_time);
   if (std::isfinite(ov.real_time_factor)) {
-    std::snprintf(lines[n++], 128, "real time x %.2f", ov.real_time_factor);
+    std::snprintf(lines[n++], 128, "real time x %.3g", ov.real_time_factor);
   }
   if (!ov.joint.empty()) {
     if (std::isfinite(ov.torque)) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <set>
 
+#include "se3_sim/format.h"
+
 namespace se3_ros {
 
 geometry_msgs::Transform to_transform(const se3::SE3& f) {
@@ -61,8 +63,7 @@ std::string from_pose(const geometry_msgs::Pose& p, se3::SE3& out) {
   }
   const double norm = std::sqrt(o.x * o.x + o.y * o.y + o.z * o.z + o.w * o.w);
   if (std::abs(norm - 1) > 1e-3) {
-    return "the orientation (x, y, z, w) is not a unit quaternion (norm " + std::to_string(norm) +
-           ")";
+    return "the orientation (x, y, z, w) is not a unit quaternion (norm " + se3::num(norm) + ")";
   }
   out.R = se3::rotation_from_quaternion(o.x / norm, o.y / norm, o.z / norm, o.w / norm);
   out.p = se3::Vec3(p.position.x, p.position.y, p.position.z);
@@ -108,8 +109,8 @@ std::string check_torque_command(const se3::Model& m, const JointTable& joints,
     if (!std::isfinite(e)) return "non-finite effort for '" + name + "'";
     const bool limited = i >= 1 && std::isfinite(m.effort[i]) && m.effort[i] > 0;
     if (!limited && std::abs(e) > max_effort) {
-      return "effort " + std::to_string(e) + " for '" + name +
-             "' (no URDF effort limit) exceeds ~max_effort " + std::to_string(max_effort);
+      return "effort " + se3::num(e) + " for '" + name +
+             "' (no URDF effort limit) exceeds ~max_effort " + se3::num(max_effort);
     }
     out.efforts.emplace_back(i, e);
   }
@@ -117,9 +118,13 @@ std::string check_torque_command(const se3::Model& m, const JointTable& joints,
     const se3::Vec6 w = from_wrench(msg.base_wrench);
     if (!w.allFinite()) return "non-finite base wrench";
     if (w.head<3>().norm() > max_wrench || w.tail<3>().norm() > max_wrench) {
-      return "base wrench (|torque| " + std::to_string(w.head<3>().norm()) + ", |force| " +
-             std::to_string(w.tail<3>().norm()) + ") exceeds ~max_wrench " +
-             std::to_string(max_wrench);
+      // The norm scaled by the largest component: 1e300 squared would print as inf.
+      auto size = [](const se3::Vec3& v) {
+        const double big = v.cwiseAbs().maxCoeff();
+        return big > 0 ? big * (v / big).norm() : 0.0;
+      };
+      return "base wrench (|torque| " + se3::num(size(w.head<3>())) + ", |force| " +
+             se3::num(size(w.tail<3>())) + ") exceeds ~max_wrench " + se3::num(max_wrench);
     }
     out.has_base_wrench = true;
     out.base_wrench = w;
@@ -164,7 +169,8 @@ void fill_chain_state(const se3::Model& m, const sensor_msgs::JointState& js, co
 
 TfTree tf_tree(const se3::Model& m, const std::string& world_frame) {
   TfTree t;
-  t.world_edge = m.links.empty() || m.links[0].name != world_frame;
+  // No links (the empty robot of a scene of objects alone): no robot frame to hang on the world.
+  t.world_edge = !m.links.empty() && m.links[0].name != world_frame;
   for (size_t k = 1; k < m.links.size(); ++k) {
     const se3::LinkFrame& L = m.links[k];
     if (L.parent < 0) continue;  // a model built in code without the URDF tree

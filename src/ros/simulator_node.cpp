@@ -32,6 +32,7 @@
 #include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
+#include "se3_sim/format.h"
 #include "se3_sim/gain_check.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
@@ -115,6 +116,31 @@ std::vector<std::pair<std::string, double>> joint_values(const std::string& text
 // serves again.
 constexpr double kSliceSeconds = 0.002;
 
+// A mutex taken in the order asked for (a ticket lock). The main loop lets go of the simulator
+// between the slices of a step request and at once wants it back; std::mutex may hand it back to
+// the loop again and again while a service callback waits (answers took up to 4 s). In turn,
+// every waiting callback gets the simulator before the loop's next slice.
+class TurnMutex {
+ public:
+  void lock() {
+    std::unique_lock<std::mutex> l(m_);
+    const std::uint64_t ticket = next_++;
+    turn_.wait(l, [&] { return serving_ == ticket; });
+  }
+  void unlock() {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      ++serving_;
+    }
+    turn_.notify_all();
+  }
+
+ private:
+  std::mutex m_;
+  std::condition_variable turn_;
+  std::uint64_t next_ = 0, serving_ = 0;
+};
+
 }  // namespace
 
 class SimulatorNodeImpl {
@@ -183,8 +209,8 @@ class SimulatorNodeImpl {
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> tf_static_;
 
-  std::mutex mu_;
-  std::condition_variable step_done_;
+  TurnMutex mu_;
+  std::condition_variable_any step_done_;
   se3::Scene scene_;
   std::unique_ptr<se3::Simulator> sim_;
   const se3::Model* model_ = nullptr;  ///< the simulator's (immutable after init)
@@ -218,6 +244,8 @@ class SimulatorNodeImpl {
   std::uint64_t anchored_ = 0;  ///< steps taken since anchor_
   std::uint64_t period_steps_ = 0;
   Clock::duration step_wall_{0};
+  double T_max_ = 0, energy_time_ = 0;
+  bool fast_warned_ = false;  ///< largest kinetic energy seen at a publication
   se3::VecX effort_;
   std::vector<se3::SE3> links_;
   sensor_msgs::JointState js_;
@@ -262,13 +290,17 @@ void SimulatorNodeImpl::configure() {
   const std::string scene_arg = get_text(pnh_, "scene").value_or("");
   const std::string scene_path = scene_arg.empty() ? "" : scene_file(scene_arg, !urdf_xml.empty());
   if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
-  if (urdf_xml.empty() && scene_.robot_path.empty()) {
+  // A scene of objects alone runs without a robot (an empty one: a fixed base without mass).
+  const bool objects_only =
+      urdf_xml.empty() && scene_.robot_path.empty() && !scene_.objects.empty();
+  if (urdf_xml.empty() && scene_.robot_path.empty() && !objects_only) {
     throw std::runtime_error(
         "no robot: give robot:=FILE.urdf, load robot_description, or a scene that names a robot "
         "(scene:=satellite_arm)" +
         (scene_path.empty() ? std::string() : "; scene " + scene_path + " names none"));
   }
-  robot_source_ = !urdf_xml.empty()
+  robot_source_ = objects_only ? "no robot, the scene's objects only"
+                  : !urdf_xml.empty()
                       ? (had_description ? "robot_description" : "~urdf_file " + urdf_file)
                       : "the scene's robot " + scene_.robot;
   // The generic defaults (docs/design.md, "Launch files"): a scene that does not say `base:`
@@ -311,6 +343,8 @@ void SimulatorNodeImpl::configure() {
   const se3::Model& m = *model_;
   for (const auto& w : m.warnings) ROS_WARN("simulator: %s", w.c_str());
   set_initial_positions(initial);
+  const std::string deep = sim_->deep_penetration_warning();
+  if (!deep.empty()) ROS_WARN("simulator: %s", deep.c_str());
   if (m.floating && !m.links.empty() && m.links[0].name == world_frame_) {
     throw std::runtime_error("the free base's root link is named '" + world_frame_ +
                              "', as the world frame: give world_frame:=<another name>");
@@ -320,9 +354,11 @@ void SimulatorNodeImpl::configure() {
   if (!had_description) {
     // Others (renderer, teleop, robot_state_publisher) read the robot from robot_description.
     const se3::GeometryModel chain = se3::chain_geometry(m);  // chain:N has no file
+    // A scene of objects: the empty robot's URDF (its one link is the world frame), so that the
+    // renderer finds a description and frames the objects' markers.
     const std::string text = !urdf_xml.empty() ? urdf_xml
-                             : scene_.robot_path.compare(0, 6, "chain:") == 0
-                                 ? se3::model_to_urdf(m, &chain)
+                             : objects_only || scene_.robot_path.compare(0, 6, "chain:") == 0
+                                 ? se3::model_to_urdf(m, objects_only ? nullptr : &chain)
                                  : read_file(scene_.robot_path);
     nh_.setParam("robot_description", text);
   }
@@ -512,7 +548,7 @@ void SimulatorNodeImpl::run() {
     Clock::time_point now = Clock::now();
     Clock::time_point wake = next_pub;
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      std::lock_guard<TurnMutex> lock(mu_);
       if (request_.active) {
         run_step_slice();
         wake = now;  // come back at once (after publishing, if due)
@@ -545,7 +581,7 @@ void SimulatorNodeImpl::run() {
     now = Clock::now();
     if (now >= next_pub) {
       {
-        std::lock_guard<std::mutex> lock(mu_);
+        std::lock_guard<TurnMutex> lock(mu_);
         if (!lockstep_) publish_state();
         publish_stats_and_markers(now);
         publish_controller_states();
@@ -556,7 +592,7 @@ void SimulatorNodeImpl::run() {
     if (wake > now) std::this_thread::sleep_until(std::min(wake, next_pub));
   }
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    std::lock_guard<TurnMutex> lock(mu_);
     if (request_.active) end_step_request(false, "the simulator is shutting down");
   }
   spinner.stop();
@@ -639,7 +675,7 @@ void SimulatorNodeImpl::on_torques(const ros::MessageEvent<se3_sim::JointTorques
     reject("torque command", why);
     return;
   }
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   for (const auto& ie : torque_.efforts) {
     if (ie.first > 0) sim_->set_joint_effort(ie.first, ie.second);
   }
@@ -694,7 +730,7 @@ void SimulatorNodeImpl::on_trajectory(int c,
 }
 
 void SimulatorNodeImpl::controller_command(int c, const double* values, size_t n) {
-  std::unique_lock<std::mutex> lock(mu_);
+  std::unique_lock<TurnMutex> lock(mu_);
   const std::string why = sim_->controllers()->set_command(c, values, n);
   if (!why.empty()) {
     lock.unlock();
@@ -720,7 +756,7 @@ void SimulatorNodeImpl::after_command() {
 // ------------------------------------------------------------------ services
 
 bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   if (request_.active) end_step_request(false, "interrupted by simulator/reset");
   sim_->reset();
   status_.clear();
@@ -734,7 +770,7 @@ bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger:
 }
 
 bool SimulatorNodeImpl::on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   if (request_.active) end_step_request(false, "interrupted by simulator/pause");
   res.success = true;
   res.message = paused_ ? "already paused" : "paused";
@@ -743,7 +779,7 @@ bool SimulatorNodeImpl::on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger:
 }
 
 bool SimulatorNodeImpl::on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   if (!sim_->failure().empty()) {
     res.success = false;
     res.message = "cannot resume after divergence (" + sim_->failure() + "); call simulator/reset";
@@ -759,7 +795,7 @@ bool SimulatorNodeImpl::on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger
 }
 
 bool SimulatorNodeImpl::on_step(se3_sim::Step::Request& req, se3_sim::Step::Response& res) {
-  std::unique_lock<std::mutex> lock(mu_);
+  std::unique_lock<TurnMutex> lock(mu_);
   if (!paused_ && !lockstep_) {
     res.success = false;
     res.message = "the simulator is running; call simulator/pause first";
@@ -798,7 +834,7 @@ bool SimulatorNodeImpl::on_set_state(se3_sim::SetState::Request& req,
     res.message = "velocity needs one value per name (or none)";
     return true;
   }
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   se3::State x = sim_->state();
   std::vector<bool> seen(m.n + 1, false);
   for (size_t k = 0; k < req.name.size(); ++k) {
@@ -822,9 +858,9 @@ bool SimulatorNodeImpl::on_set_state(se3_sim::SetState::Request& req,
       return true;
     }
     if (q < m.lower[i] || q > m.upper[i]) {
-      res.message = "position " + std::to_string(q) + " of '" + req.name[k] +
-                    "' is outside its limits [" + std::to_string(m.lower[i]) + ", " +
-                    std::to_string(m.upper[i]) + "]";
+      res.message = "position " + se3::num(q) + " of '" + req.name[k] +
+                    "' is outside its limits [" + se3::num(m.lower[i]) + ", " +
+                    se3::num(m.upper[i]) + "]";
       return true;
     }
     x.q[i - 1] = q;
@@ -883,7 +919,7 @@ bool SimulatorNodeImpl::on_apply_wrench(se3_sim::ApplyWrench::Request& req,
     res.message = "torque or force above ~max_wrench " + std::to_string(max_wrench_);
     return true;
   }
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   try {
     sim_->apply_link_wrench(link, p, w, req.duration);
   } catch (const std::exception& e) {
@@ -891,14 +927,14 @@ bool SimulatorNodeImpl::on_apply_wrench(se3_sim::ApplyWrench::Request& req,
     return true;
   }
   res.success = true;
-  res.message = req.duration < 0 ? "applied until cleared"
-                                 : "applied for " + std::to_string(req.duration) + " s";
+  res.message =
+      req.duration < 0 ? "applied until cleared" : "applied for " + se3::num(req.duration) + " s";
   return true;
 }
 
 bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
                                           std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<TurnMutex> lock(mu_);
   const int n = sim_->link_wrench_count();
   sim_->clear_link_wrenches();
   res.success = true;
@@ -1005,9 +1041,20 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   st.real_time_factor = wall > 0 ? period_steps_ * sim_->dt() / wall : 0.0;
   const double T = sim_->kinetic_energy(), U = sim_->potential_energy();
   const double T0 = sim_->initial_kinetic_energy();
-  st.energy_drift_rel = finite_or_zero(std::abs(T + U - T0) / std::max(T0, 1e-12));
-  st.energy_balance_rel = finite_or_zero(std::abs(T + U - T0 - sim_->work()) / std::max(T0, 1e-12));
+  if (sim_->time() < energy_time_ || !(T_max_ >= 0)) T_max_ = 0;  // reset since the last one
+  energy_time_ = sim_->time();
+  T_max_ = std::max(T_max_, T);
+  const double scale = se3::energy_drift_scale(sim_->energy_scale0(), T_max_);
+  st.energy_drift_rel = finite_or_zero(std::abs(T + U - T0) / scale);
+  st.energy_balance_rel = finite_or_zero(std::abs(T + U - T0 - sim_->work()) / scale);
   st.steps = sim_->steps();
+  st.fast_steps = sim_->fast_steps();
+  if (st.fast_steps > 0 && !fast_warned_) {
+    ROS_WARN("simulator: %s", sim_->fast_step_warning().c_str());
+    fast_warned_ = true;
+  } else if (st.fast_steps == 0) {
+    fast_warned_ = false;  // after a reset, warn again
+  }
   st.accepted_commands = accepted_;
   st.rejected_commands = rejected_;
   st.dropped_commands = dropped_;

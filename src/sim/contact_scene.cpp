@@ -11,7 +11,8 @@
 //     FL: {link: FL_FOOT, position: [0, 0, 0], radius: 0.016}
 //   constraint_options: {baumgarte_omega: 20, baumgarte_zeta: 1, project: true,
 //                        pgs_iterations: 200, erp: 0.2, slop: 1e-4, margin: 0.01,
-//                        restitution_velocity: 0.2, solver: pgs}     # or active_set
+//                        restitution_velocity: 0.2, max_correction_velocity: 0.5,
+//                        solver: pgs}     # or active_set
 // directions name world axes (x, y, z) or give vectors [dx, dy, dz].
 #include "contact_scene.h"
 
@@ -156,7 +157,7 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
          r.fields(v, {"baumgarte_omega", "baumgarte_zeta", "project", "projection_tol",
                       "projection_iterations", "singular_tol", "pgs_iterations", "pgs_tol", "erp",
                       "slop", "margin", "bilateral_erp", "restitution_velocity",
-                      "limit_restitution", "solver"})) {
+                      "limit_restitution", "max_correction_velocity", "solver"})) {
       const std::string& k = x.name;
       if (k == "solver") {
         const std::string name = r.text(x);
@@ -173,6 +174,8 @@ void parse_constraint_key(const SceneReader& r, const Field& v, ConstraintSpec& 
         o.projection_iterations = static_cast<int>(r.integer(x, 0, 1000000));
       } else if (k == "pgs_iterations") {
         o.pgs_iterations = std::max(1, static_cast<int>(r.integer(x, 0, 1000000)));
+      } else if (k == "max_correction_velocity") {
+        o.max_correction_velocity = r.positive(x);
       } else if (k == "erp") {
         o.erp = r.in_range(x, 0, 1);
       } else if (k == "bilateral_erp") {

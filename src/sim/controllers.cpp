@@ -152,11 +152,15 @@ class Reader {
  public:
   Reader(const std::string& where, const std::string& name) : where_(where), name_(name) {}
 
-  [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const {
+  /// "file:line" of a node ("file" when yaml-cpp has no mark).
+  std::string at(const YAML::Node& n) const {
     std::string at = where_;
     const YAML::Mark m = n.Mark();
     if (m.line >= 0) at += ":" + std::to_string(m.line + 1);
-    throw ControllerError(at + ": controller '" + name_ + "': " + what);
+    return at;
+  }
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const {
+    throw ControllerError(at(n) + ": controller '" + name_ + "': " + what);
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw ControllerError(where_ + ": controller '" + name_ + "': " + what);
@@ -303,6 +307,7 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
   if (!node.IsMap()) r.fail(node, "needs a map {type: ..., joints: [...], ...}");
   ControllerSpec s;
   s.name = name;
+  s.where = r.at(node);
   if (!node["type"]) r.fail(node, "needs a 'type'");
   s.type = r.text(node["type"], "type");
   try {
@@ -317,12 +322,16 @@ ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
     if (!node["joint"]) r.fail(node, "needs 'joint: NAME'");
     if (node["joints"]) r.fail(node["joints"], "takes one 'joint', not 'joints'");
     s.joints.push_back(r.text(node["joint"], "joint"));
+    s.joint_where.push_back(r.at(node["joint"]));
   } else {
     if (!node["joints"]) r.fail(node, "needs 'joints: [a, b, ...]'");
     if (node["joint"]) r.fail(node["joint"], "takes a list 'joints', not 'joint'");
     const YAML::Node j = node["joints"];
     if (!j.IsSequence() || j.size() == 0) r.fail(j, "'joints' needs a list of joint names");
-    for (const auto& e : j) s.joints.push_back(r.text(e, "joints"));
+    for (const auto& e : j) {
+      s.joints.push_back(r.text(e, "joints"));
+      s.joint_where.push_back(r.at(e));
+    }
   }
   std::set<std::string> seen;
   for (const auto& j : s.joints) {
@@ -462,14 +471,17 @@ void set_interface_gains(std::vector<ControllerSpec>& specs,
 ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpec>& specs)
     : model_(model), owner_(model.n + 1, -1) {
   std::set<std::string> names;
+  // Binding errors name where the controller (or its joint) was written, when it was read.
+  auto at = [](const std::string& where) { return where.empty() ? where : where + ": "; };
   for (const ControllerSpec& s : specs) {
     if (!names.insert(s.name).second) {
-      throw ControllerError("controller '" + s.name + "' is given twice");
+      throw ControllerError(at(s.where) + "controller '" + s.name + "' is given twice");
     }
     if (s.kind == ControllerKind::JointState) continue;  // nothing to run
     const bool optional = gains_optional(s.kind, s.iface);
     if (uses_pid(s.kind) && s.gains.size() != s.joints.size() && !(optional && s.gains.empty())) {
-      throw ControllerError("controller '" + s.name + "': gains for every joint needed");
+      throw ControllerError(at(s.where) + "controller '" + s.name +
+                            "': gains for every joint needed");
     }
     const bool trajectory = s.kind == ControllerKind::Trajectory;
     Ctl c;
@@ -482,12 +494,13 @@ ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpe
     }
     for (size_t k = 0; k < n; ++k) {
       const int i = model.joint_index(s.joints[k]);
+      const std::string& where = k < s.joint_where.size() ? s.joint_where[k] : s.where;
       if (i < 1) {
-        throw ControllerError("controller '" + s.name + "': joint '" + s.joints[k] +
+        throw ControllerError(at(where) + "controller '" + s.name + "': joint '" + s.joints[k] +
                               "' is not a moving joint of the model (unknown, fixed or locked)");
       }
       if (owner_[i] >= 0) {
-        throw ControllerError("controller '" + s.name + "': joint '" + s.joints[k] +
+        throw ControllerError(at(where) + "controller '" + s.name + "': joint '" + s.joints[k] +
                               "' is already driven by controller '" + ctl_[owner_[i]].spec.name +
                               "'");
       }

@@ -45,7 +45,7 @@ std::vector<std::string> gain_stability_warnings(const Model& model, const State
       }
       std::snprintf(line, sizeof line,
                     "controller '%s': joint '%s' %s %s past what a step of %g s carries "
-                    "(effective inertia %.3g, %s = %.2f, stable below 2): its velocity will flip "
+                    "(effective inertia %.3g, %s = %.3g, stable below 2): its velocity will flip "
                     "from step to step; lower %s below %.3g or dt",
                     s.name.c_str(), s.joints[k].c_str(), gains, velocity ? "is" : "are", dt, 1 / m,
                     velocity ? "dt p / M" : "dt d / M + dt^2 p / 2M", factor, lower_p ? "p" : "d",

@@ -134,6 +134,9 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     }
   }
 
+  const std::string deep = sim.deep_penetration_warning();
+  if (!deep.empty()) std::fprintf(stderr, "warning: %s\n", deep.c_str());
+
   std::ofstream csv;
   if (!o.out_csv.empty()) {
     csv.open(o.out_csv);
@@ -201,15 +204,21 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   r.velocity_level_steps = sim.velocity_level_steps();
   r.events = sim.events();
   r.integrator = sim.schemes_used();
-  const double scale = T0 > 0 ? T0 : T_max;
-  if (scale > 0) r.energy_drift_rel = dE / scale;
-  if (scale > 0) r.energy_balance_rel = dB / scale;
+  const double scale = energy_drift_scale(sim.energy_scale0(), T_max);
+  r.energy_drift_rel = dE / scale;
+  r.energy_balance_rel = dB / scale;
   if (sim.constraints()) r.constraint_error_max = dcon;
   if (conserve_momentum) {
     r.momentum_drift_rel = h0.norm() > 0 ? dh / h0.norm() : dh;
     r.com_drift_max = dc;
   }
-  const bool contact = !scene.objects.empty() || spec.ground || !spec.contacts.empty();
+  r.fast_steps = sim.fast_steps();
+  if (!sim.fast_step_warning().empty()) {
+    std::fprintf(stderr, "warning: %s (%llu such steps in the run)\n",
+                 sim.fast_step_warning().c_str(), static_cast<unsigned long long>(r.fast_steps));
+  }
+  const bool contact = !scene.objects.empty() || spec.ground || !spec.contacts.empty() ||
+                       uses_scene_collision(scene);
   if (contact) r.penetration_max = sim.penetration_max();
   for (std::size_t j = 0; j < sim.object_specs().size() && j < sim.objects().size(); ++j) {
     r.objects.push_back(
@@ -264,7 +273,7 @@ std::string simulate_result_json(const SimulateResult& r) {
     << ", \"energy_balance_rel\": " << num(r.energy_balance_rel)
     << ", \"momentum_drift_rel\": " << num(r.momentum_drift_rel)
     << ", \"constraint_error_max\": " << num(r.constraint_error_max)
-    << ", \"penetration_max\": " << num(r.penetration_max);
+    << ", \"penetration_max\": " << num(r.penetration_max) << ", \"fast_steps\": " << r.fast_steps;
   if (!r.objects.empty()) {
     auto list = [&](const double* v, int n) {
       std::string out = "[";

@@ -18,9 +18,11 @@
 // hull (the shape it collides as), about the hull's centroid.
 #include <sys/stat.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <unordered_set>
 
 #include "scene_objects_reader.h"
@@ -222,6 +224,18 @@ SceneObject read_object(const SceneReader& r, const Field& item, const std::stri
       }
     } else {
       o.inertia = Inertia::from_com(o.mass, Vec3::Zero(), shape_inertia(o.shape, o.mass));
+    }
+    // A free body needs a spatial inertia it can be accelerated by: positive definite, with a
+    // finite inverse (a 1e-300 m box or a 1e-300 kg mass underflow to a singular one).
+    const Mat6 M = o.inertia.matrix();
+    const Eigen::LLT<Mat6> llt(M);
+    if (!M.allFinite() || llt.info() != Eigen::Success || !M.inverse().allFinite()) {
+      char buf[120];
+      std::snprintf(buf, sizeof buf, "mass %g kg, rotational inertia %g to %g kg m^2", o.mass,
+                    o.inertia.I.diagonal().minCoeff(), o.inertia.I.diagonal().maxCoeff());
+      r.fail(item, "'" + item.key + "' (object '" + o.name + "'): " + buf +
+                       ": a free object needs an inertia that is positive definite and "
+                       "invertible in double precision (check the shape's size and the mass)");
     }
   }
   return o;

@@ -1,10 +1,12 @@
 // The Simulator (sim.h): stepping with commands, passive forces and the divergence guard.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
 #include "lie/simd.h"
+#include "se3_sim/format.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
@@ -175,6 +177,14 @@ void Simulator::refresh_reference() {
   const double m = model_->total_mass();
   E_ref_ = std::max(T0_, 0.5 * m) + m * model_->gravity.norm();
   if (!(E_ref_ > 0)) E_ref_ = 1;
+  // The energy gravity exchanges when the robot turns over: M |g| L, L the largest distance of
+  // a body origin from the centre of mass (at least kMinEnergyLength).
+  const Vec3 c = se3::center_of_mass(*model_, diag_, state_.base, state_.q);
+  forward_kinematics(*model_, diag_, state_.base, state_.q);
+  double L = kMinEnergyLength;
+  for (int i = 0; i <= model_->n; ++i) L = std::max(L, (diag_.oMb[i].p - c).norm());
+  energy_scale0_ = std::max(T0_, m * model_->gravity.norm() * L);
+  if (!std::isfinite(energy_scale0_)) energy_scale0_ = 0;
 }
 
 void Simulator::set_integrator(const std::string& name) {
@@ -317,6 +327,34 @@ const VecX& Simulator::step_forces() {
   return forces_;
 }
 
+namespace {
+
+// The smallest extent of a shape (m): what a body may move in one step before it can pass
+// through something as thin as itself unseen.
+double smallest_extent(const Shape& s) {
+  switch (s.type) {
+    case ShapeType::Box:
+      return s.box.minCoeff();
+    case ShapeType::Sphere:
+    case ShapeType::Capsule:
+      return 2 * s.radius;
+    case ShapeType::Cylinder:
+      return std::min(2 * s.radius, s.length);
+    case ShapeType::Mesh:
+      break;
+  }
+  if (!s.mesh || s.mesh->positions.empty()) return 0;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3f& p : s.mesh->positions) {
+    const Vec3 q = p.cast<double>().cwiseProduct(s.scale);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  return (hi - lo).cwiseAbs().minCoeff();
+}
+
+}  // namespace
+
 void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   std::vector<ObjectBody> bodies;
   for (size_t j = 0; j < objects.size(); ++j) {
@@ -332,13 +370,21 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
     b.index = static_cast<int>(j);
     b.model = std::make_unique<Model>();
     b.model->floating = true;
+    b.model->name = o.name;
     b.model->start_with_base(o.name, o.inertia);
     b.model->gravity = model_->gravity;
     b.model->finalize();
-    b.model->validate();
+    try {
+      b.model->validate();
+    } catch (const ModelError&) {
+      throw std::invalid_argument("object '" + o.name +
+                                  "': a free object needs a mass and a positive-definite "
+                                  "inertia (check the shape's size and the mass)");
+    }
     b.initial = State(*b.model);
     b.initial.base = o.pose;
     b.initial.v = o.twist;
+    b.size = smallest_extent(o.shape);
     bodies.push_back(std::move(b));
   }
   object_specs_ = objects;
@@ -414,6 +460,18 @@ void Simulator::reset_objects() {
   }
   penetration_ = penetration_max_ = 0;
   contacts_fresh_ = false;
+  fast_steps_ = 0;
+  fast_step_warning_.clear();
+}
+
+void Simulator::note_fast_step(size_t j, double moved) {
+  if (fast_steps_++ > 0) return;
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "' moved %.3g m in one step at t = %.6g s, more than its size (%.3g m): it may "
+                "pass through thin objects unseen (tunnelling); a smaller dt avoids it",
+                moved, time_ + config_.dt, bodies_[j].size);
+  fast_step_warning_ = "object '" + object_specs_[bodies_[j].index].name + buf;
 }
 
 double Simulator::collide_objects() {
@@ -439,6 +497,30 @@ double Simulator::collide_objects() {
   for (const Contact& c : collision_data_.contacts) deepest = std::max(deepest, c.depth);
   contacts_fresh_ = true;
   return deepest;
+}
+
+std::string Simulator::deep_penetration_warning() {
+  if (!collider()) return "";
+  collide_objects();
+  const ConstraintOptions& o = spec_.options;
+  const double reach = o.slop + (o.erp > 0 ? o.max_correction_velocity * config_.dt / o.erp : 0);
+  const Contact* deepest = nullptr;
+  for (const Contact& c : collision_data_.contacts) {
+    if (c.depth > std::max(o.margin, reach) && (!deepest || c.depth > deepest->depth)) {
+      deepest = &c;
+    }
+  }
+  if (!deepest) return "";
+  const std::vector<CollisionObject>& objects = collider()->objects();
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%.3g m deep", deepest->depth);
+  std::string what = "'" + objects[deepest->a].name + "' and '" + objects[deepest->b].name +
+                     "' interpenetrate " + buf;
+  std::snprintf(buf, sizeof buf,
+                ": they are pushed apart at no more than %g m/s (constraint_options: "
+                "max_correction_velocity), taking about %.2g s",
+                o.max_correction_velocity, deepest->depth / o.max_correction_velocity);
+  return what + buf;
 }
 
 void Simulator::rebuild_constraints() {
@@ -576,6 +658,8 @@ bool Simulator::step() {
         o.pose = body_states_[j].base;
         o.twist = body_states_[j].v;
         save(body_states_[j], body_last_good_[j]);
+        const double moved = body_states_[j].v.tail<3>().norm() * config_.dt;
+        if (moved > bodies_[j].size) note_fast_step(j, moved);
       }
     }
     penetration_max_ = std::max(penetration_max_, penetration_);
@@ -610,14 +694,13 @@ void Simulator::roll_back(const StepInfo& info) {
   } else if (!state_.finite()) {
     why = "non-finite state";
   } else if (!rates_ok()) {
-    why = "a rate of " + std::to_string(state_.v.cwiseAbs().maxCoeff()) + " exceeds the limit " +
-          std::to_string(config_.guard.max_rate);
+    why = "a rate of " + num(state_.v.cwiseAbs().maxCoeff()) + " exceeds the limit " +
+          num(config_.guard.max_rate);
   } else {
     const double T = se3::kinetic_energy(*model_, diag_, state_.base, state_.q, state_.v);
     to_checked = true;
-    why = "kinetic energy " + std::to_string(T) + " J exceeds " +
-          std::to_string(config_.guard.energy_growth) + " x the reference " +
-          std::to_string(E_ref_) + " J";
+    why = "kinetic energy " + num(T) + " J exceeds " + num(config_.guard.energy_growth) +
+          " x the reference " + num(E_ref_) + " J";
   }
   for (size_t j = 0; j < bodies_.size(); ++j) body_states_[j] = body_last_good_[j];
   contacts_fresh_ = false;
@@ -630,9 +713,9 @@ void Simulator::roll_back(const StepInfo& info) {
     steps_ = last_checked_steps_;
     W_ = W_checked_;
   }
-  failure_ = "diverged at t = " + std::to_string(time_ + config_.dt) + " s with " +
-             stepper_->name() + ", dt = " + std::to_string(config_.dt) + ": " + why +
-             "; state rolled back to t = " + std::to_string(time_) + " s";
+  failure_ = "diverged at t = " + num(time_ + config_.dt) + " s with " + stepper_->name() +
+             ", dt = " + num(config_.dt) + ": " + why + "; state rolled back to t = " + num(time_) +
+             " s";
   stepper_->restart();
   passive_power_ = passive_power();
 }

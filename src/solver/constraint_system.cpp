@@ -53,8 +53,9 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
     return p;
   };
   if (!(opt_.baumgarte_omega >= 0) || !(opt_.baumgarte_zeta >= 0) || !(opt_.erp >= 0) ||
-      !(opt_.erp <= 1) || !(opt_.slop >= 0) || !(opt_.margin >= 0) || opt_.pgs_iterations < 1 ||
-      !(opt_.singular_tol > 0) || !(spec.mu >= 0) || !std::isfinite(spec.mu)) {
+      !(opt_.erp <= 1) || !(opt_.slop >= 0) || !(opt_.max_correction_velocity > 0) ||
+      !(opt_.margin >= 0) || opt_.pgs_iterations < 1 || !(opt_.singular_tol > 0) ||
+      !(spec.mu >= 0) || !std::isfinite(spec.mu)) {
     throw ModelError("constraint options out of range");
   }
   if (spec_.joint_limits) {  // limits on a model without any: no rows, no velocity-level step
@@ -172,6 +173,7 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
   params_.margin = opt_.margin;
   params_.restitution_velocity = opt_.restitution_velocity;
   params_.limit_restitution = opt_.limit_restitution;
+  params_.max_correction_velocity = opt_.max_correction_velocity;
   solver_opt_.iterations = opt_.pgs_iterations;
   solver_opt_.tol = opt_.pgs_tol;
   solver_opt_.singular_tol = opt_.singular_tol;
@@ -265,7 +267,11 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
     FreeBody f;
     f.model = m;
     f.Minv = m->inertia[0].matrix().inverse();
-    if (!f.Minv.allFinite()) throw ModelError("free body '" + m->name + "' has a singular inertia");
+    if (!f.Minv.allFinite()) {
+      const std::string& name = m->name.empty() ? m->body_name[0] : m->name;
+      throw ModelError("free object '" + name +
+                       "' has a singular inertia (mass or size too small)");
+    }
     f.pose.assign(1, SE3());
     free_.push_back(std::move(f));
   }

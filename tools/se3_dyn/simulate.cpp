@@ -53,7 +53,7 @@ int cmd_simulate(int argc, char** argv) {
         r.integrator.c_str(), r.dt, static_cast<unsigned long long>(r.steps), r.sim_s, r.wall_s,
         r.sim_s > 0 ? r.wall_s / r.sim_s : 0.0);
     std::printf(
-        "energy drift (rel. to T(0)): %s\nmomentum drift (rel.): %s\n"
+        "energy drift (rel. to max(T(0), M g L, T max)): %s\nmomentum drift (rel.): %s\n"
         "constraint error max: %s\n",
         fig(r.energy_drift_rel).c_str(), fig(r.momentum_drift_rel).c_str(),
         fig(r.constraint_error_max).c_str());
@@ -61,6 +61,13 @@ int cmd_simulate(int argc, char** argv) {
     for (char& ch : by) ch = ch == '"' ? ' ' : ch;
     std::printf("steps by scheme:%s; limit impacts located: %llu\n", by.c_str(),
                 static_cast<unsigned long long>(r.events));
+    if (!std::isnan(r.penetration_max)) {
+      std::printf("penetration max: %s m\n", fig(r.penetration_max).c_str());
+    }
+    if (r.fast_steps > 0) {
+      std::printf("fast steps (an object moved farther than its size: may tunnel): %llu\n",
+                  static_cast<unsigned long long>(r.fast_steps));
+    }
     if (r.diverged) std::printf("diverged: %s\n", r.status.c_str());
   }
   if (r.diverged) {
