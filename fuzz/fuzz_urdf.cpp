@@ -1,5 +1,7 @@
-// URDF text -> Model (model_from_urdf_string): urdfdom, tinyxml and the tree builder behind the
-// guards of src/model/urdf_guard.h. Only ModelError may come out. Two cross-checks:
+// URDF text -> Model and GeometryModel (parse_urdf_document, model_from_urdf, geometry_from_urdf
+// and the string entry points): urdfdom, tinyxml, the tree builder and the geometry builder
+// behind the guards of src/model/urdf_guard.h ('%' conversions in any attribute included:
+// urdf.dict has them). Only ModelError may come out. Two cross-checks:
 //  - the guard's nesting bound (xml_shape) is never below what tinyxml builds, so no text the
 //    guard lets through can make tinyxml recurse deeper than limits::kMaxXmlDepth;
 //  - a model that loads has finite dynamics at rest, or says why not, without UB.
@@ -13,6 +15,7 @@
 
 #include "model/urdf_guard.h"
 #include "se3_sim/dynamics.h"
+#include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/model.h"
 
@@ -57,8 +60,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   se3::UrdfOptions opt;
   opt.floating = size % 2 == 1;
   try {
-    const se3::Model m = se3::model_from_urdf_string(xml, opt);
+    const se3::UrdfDocument doc = se3::parse_urdf_document(xml);
+    const se3::Model m = se3::model_from_urdf(doc, opt);
     m.validate();
+    // The geometry path (materials, shapes, stand-ins) over the same document, and the string
+    // entry point that parses again; no mesh file is read.
+    se3::GeometryOptions gopt;
+    gopt.load_meshes = false;
+    const se3::GeometryModel g = se3::geometry_from_urdf(m, doc, gopt);
+    for (const se3::GeometryObject& o : g.visuals) {
+      if (o.body < 0 || o.body > m.n || !o.material.rgba.allFinite()) __builtin_trap();
+    }
+    if (size < 4096) se3::geometry_from_urdf_string(m, xml, gopt);
     if (m.n <= 64) {
       se3::Data d(m);
       const se3::VecX q = se3::VecX::Zero(m.n), v = se3::VecX::Zero(m.nv);

@@ -4,6 +4,7 @@
 // this test instead of ending the test binary.
 #include <gtest/gtest.h>
 #include <pthread.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -668,4 +669,245 @@ int main(int argc, char** argv) {
   // Death tests fork; "threadsafe" re-runs the binary for each, so the children start clean.
   testing::FLAGS_gtest_death_test_style = "threadsafe";
   return RUN_ALL_TESTS();
+}
+
+// ---------------------------------------------------------------- files, meshes, URDF paths
+namespace {
+
+// A robot whose URDF puts printf conversions in a material's rgba (urdfdom quotes the value in
+// a complaint); the link has a visual using it and a box collision.
+std::string percent_rgba_urdf() {
+  return "<robot name=\"r\"><material name=\"m\"><color rgba=\"%s%n%x%s%n%p%n\"/></material>"
+         "<link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" "
+         "ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial><visual><geometry><box size=\"0.1 0.1 "
+         "0.1\"/></geometry><material name=\"m\"/></visual><collision><geometry><box "
+         "size=\"0.1 0.1 0.1\"/></geometry></collision></link></robot>";
+}
+
+// A scene of `robot` (a file) with a free base over the ground, contact from its collisions.
+std::string contact_scene(const std::string& robot) {
+  return "robot: " + robot +
+         "\nbase: free\nbase_pose: {position: [0, 0, 0.3], orientation: [0, 0, 0, 1]}\n"
+         "integrator: contact_semi_implicit\ndt: 0.001\n"
+         "ground: {normal: [0, 0, 1], offset: 0.0, mu: 0.8, from_collisions: true}\n";
+}
+
+// A fresh folder of this test process under the temporary folder.
+std::string temp_dir(const std::string& name) {
+  const std::string d = temp_file_name(name);
+  std::system(("rm -rf '" + d + "' && mkdir -p '" + d + "'").c_str());
+  return d;
+}
+
+}  // namespace
+
+// The geometry once parsed the URDF a second time under its own console handler, which let
+// console_bridge format urdfdom's messages: the "%n" rgba that the model path warns about
+// crashed `se3_dyn render` (rc 139), the renderer node and every contact scene. One guarded
+// parse now feeds both.
+TEST(UrdfFormatString, PercentRgbaOnTheGeometryRenderAndContactPaths) {
+  const std::string xml = percent_rgba_urdf();
+  EXPECT_EXIT(
+      {
+        const UrdfDocument doc = parse_urdf_document(xml);
+        const Model m = model_from_urdf(doc);
+        const GeometryModel a = geometry_from_urdf(m, doc);
+        const GeometryModel b = geometry_from_urdf_string(m, xml);
+        std::exit(a.visuals.size() == 1 && b.visuals.size() == 1 && a.collisions.size() == 1 ? 0
+                                                                                             : 2);
+      },
+      ::testing::ExitedWithCode(0), "");
+  const std::string urdf = temp_file("percent.urdf", xml);
+  const RunResult info = se3_dyn("info " + urdf);
+  EXPECT_EQ(info.code, 0) << info.err;
+  const RunResult render = se3_dyn("render " + urdf + " --out " + temp_file_name("percent.png"));
+  EXPECT_EQ(render.code, 0) << render.err;
+  const std::string scene = temp_file("percent_scene.yaml", contact_scene(urdf));
+  EXPECT_EXIT(
+      {
+        auto sim = make_simulator(load_scene(scene));
+        sim->step();
+        std::exit(0);
+      },
+      ::testing::ExitedWithCode(0), "");
+  const RunResult sim = se3_dyn("simulate --scene " + scene + " --duration 0.01");
+  EXPECT_EQ(sim.code, 0) << sim.err;
+}
+
+// A FIFO or a device where a file is expected blocked the reader forever (a FIFO's open waits
+// for a writer): every outside file is opened only when it is a regular file, and the error
+// says what it is. Each load runs in a child that an alarm ends, so a regression fails, not
+// hangs.
+TEST(SpecialFiles, UrdfSceneAndMeshPathsThatAreNotRegularFilesAreNamed) {
+  const std::string dir = temp_dir("special");
+  const std::string fifo = dir + "/robot.urdf";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string mesh_fifo = dir + "/mesh.stl";
+  ASSERT_EQ(::mkfifo(mesh_fifo.c_str(), 0600), 0);
+  struct Case {
+    std::function<void()> load;
+    std::string expect;
+  };
+  const Case cases[] = {
+      {[&] { model_from_urdf_file(fifo); }, "cannot read URDF file '" + fifo + "': a FIFO"},
+      {[&] { model_from_urdf_file(dir); }, "'" + dir + "': a directory"},
+      {[&] { model_from_urdf_file("/dev/null"); }, "'/dev/null': a character device"},
+      {[&] { model_from_urdf_file(dir + "/none.urdf"); }, "none.urdf': not found"},
+      {[&] { load_scene(fifo); }, "cannot read scene file '" + fifo + "': a FIFO"},
+      {[&] {
+         Shape s;
+         std::string err;
+         if (!load_mesh_shape(mesh_fifo, Vec3::Ones(), nullptr, s, &err)) throw ModelError(err);
+       },
+       "'" + mesh_fifo + "' is a FIFO"},
+      {[&] {
+         Shape s;
+         std::string err;
+         if (!load_mesh_shape(dir, Vec3::Ones(), nullptr, s, &err)) throw ModelError(err);
+       },
+       "'" + dir + "' is a directory"},
+      {[&] {
+         std::string err;
+         MeshLimits lim;
+         lim.isolate = false;
+         if (!load_mesh(mesh_fifo, &err, lim)) throw ModelError(err);
+       },
+       "'" + mesh_fifo + "': a FIFO"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.expect);
+    EXPECT_EXIT(
+        {
+          ::alarm(10);
+          exit_with_error_containing(c.load, c.expect);
+        },
+        ::testing::ExitedWithCode(0), "");
+  }
+  const RunResult info = se3_dyn("info " + fifo);
+  EXPECT_EQ(info.code, 1);
+  EXPECT_NE(info.err.find(fifo + "': a FIFO"), std::string::npos) << info.err;
+}
+
+// An OBJ's material file that is a FIFO blocked the mesh child for its 60 s; one outside the
+// mesh's folder (mtllib ../../etc/...) was read. Assimp now reads through an IOSystem that
+// opens only regular files in the mesh's folder tree: the mesh loads with its default
+// material and a warning naming the file.
+TEST(SpecialFiles, ObjMaterialFilesAreRegularFilesBesideTheMesh) {
+  const std::string dir = temp_dir("mtl");
+  const std::string fifo = dir + "/fifo.mtl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(dir + "/a.obj") << "mtllib fifo.mtl\n" << tri;
+  std::ofstream(dir + "/b.obj") << "mtllib ../../../../../../../../etc/hostname\n" << tri;
+  for (const auto& [file, expect] :
+       {std::pair<std::string, std::string>{dir + "/a.obj", fifo + "': a FIFO"},
+        {dir + "/b.obj", "outside the mesh's folder"}}) {
+    SCOPED_TRACE(file);
+    MeshLimits lim;
+    lim.seconds = 20;
+    std::string err;
+    const auto mesh = load_mesh(file, &err, lim);
+    ASSERT_TRUE(mesh) << err;
+    EXPECT_EQ(mesh->triangle_count(), 1u);
+    EXPECT_NE(mesh->warning.find(expect), std::string::npos) << mesh->warning;
+  }
+}
+
+// 30,000 copies of one triangle (240 kB) took 50-60 s: assimp's smoothing and vertex joining
+// look, for every vertex, at every vertex at its position. Repeated and degenerate faces are
+// dropped first, in linear time, and the smoothing's work is bounded (a fan of 30,000
+// distinct triangles around one vertex keeps one normal a face), each with a warning.
+TEST(DegenerateMeshes, RepeatedFacesAreDroppedAndSmoothingIsBounded) {
+  std::string dup = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  for (int i = 0; i < 30000; ++i) dup += "f 1 2 3\n";
+  dup += "f 1 1 2\n";  // degenerate
+  std::string err;
+  const auto m = decode_mesh(dup.data(), dup.size(), "obj", {}, &err);
+  ASSERT_TRUE(m) << err;
+  EXPECT_EQ(m->triangle_count(), 1u);
+  EXPECT_EQ(m->positions.size(), 3u);
+  EXPECT_NE(m->warning.find("29999 duplicate faces dropped"), std::string::npos) << m->warning;
+  EXPECT_NE(m->warning.find("1 degenerate faces dropped"), std::string::npos) << m->warning;
+  // A reversed copy is a back face, not a duplicate; a rotated one is the same face.
+  std::string two = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  for (int i = 0; i < 10000; ++i) two += "f 1 2 3\nf 3 2 1\nf 2 3 1\n";
+  const auto t = decode_mesh(two.data(), two.size(), "obj", {}, &err);
+  ASSERT_TRUE(t) << err;
+  EXPECT_EQ(t->triangle_count(), 2u);
+
+  std::string fan = "v 0 0 0\n";
+  const int n = 30000;
+  for (int i = 0; i <= n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    fan += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+  }
+  for (int i = 0; i < n; ++i) {
+    fan += "f 1 " + std::to_string(i + 2) + " " + std::to_string(i + 3) + "\n";
+  }
+  const auto f = decode_mesh(fan.data(), fan.size(), "obj", {}, &err);
+  ASSERT_TRUE(f) << err;
+  EXPECT_GT(f->triangle_count(), std::size_t(n) - 100);  // a few rounded to degenerate
+  EXPECT_NE(f->warning.find("normals not smoothed"), std::string::npos) << f->warning;
+  for (const Vec3f& nrm : f->normals) EXPECT_NEAR(std::abs(nrm.z()), 1.0f, 1e-4f);
+  // Below the bound the smoothing runs as before: no warning on a shipped mesh.
+  const std::string stl =
+      read(kSource +
+           "/data/meshes/example-robot-data/robots/panda_description/meshes/collision/link4.stl");
+  if (!stl.empty()) {
+    const auto c = decode_mesh(stl.data(), stl.size(), "stl", {}, &err);
+    ASSERT_TRUE(c) << err;
+    EXPECT_EQ(c->warning, "");
+  }
+}
+
+// A collision mesh that cannot be found said "collision object 'base_0': a mesh without
+// triangles"; a robot file that is not a URDF said "Error document empty." without the file.
+TEST(FileMessages, MissingCollisionMeshAndNonUrdfFileNameTheFile) {
+  const std::string urdf = temp_file(
+      "missing_mesh.urdf",
+      "<robot name=\"r\"><link name=\"base\"><inertial><mass value=\"1\"/><inertia ixx=\"1\" "
+      "iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial><collision><geometry><mesh "
+      "filename=\"no_such_mesh.stl\"/></geometry></collision></link></robot>");
+  const std::string scene = temp_file("missing_mesh.yaml", contact_scene(urdf));
+  const std::string err = error_of<SceneError>([&] { make_simulator(load_scene(scene)); });
+  EXPECT_NE(err.find("link 'base'"), std::string::npos) << err;
+  EXPECT_NE(err.find("no_such_mesh.stl"), std::string::npos) << err;
+  EXPECT_NE(err.find("not found"), std::string::npos) << err;
+  const std::string passwd = temp_file("passwd", "root:x:0:0:root:/root:/bin/bash\n");
+  const std::string not_urdf = error_of<ModelError>([&] { model_from_urdf_file(passwd); });
+  EXPECT_NE(not_urdf.find("URDF file '" + passwd + "'"), std::string::npos) << not_urdf;
+}
+
+// package://PKG/../../ resolved outside the package; a mesh path that is a directory, FIFO or
+// device was "not found". Both name what they are.
+TEST(ResourceNames, PackageNamesStayInTheirPackageAndPathsSayWhatTheyAre) {
+  const std::string root = temp_dir("pkgs");
+  std::system(("mkdir -p '" + root + "/esc_pkg/meshes/dir.stl'").c_str());
+  std::ofstream(root + "/esc_pkg/package.xml") << "<package><name>esc_pkg</name></package>";
+  std::ofstream(root + "/esc_pkg/meshes/a.stl") << "solid a\nendsolid a\n";
+  std::ofstream(root + "/outside.stl") << "solid a\nendsolid a\n";
+  ResourcePaths paths;
+  paths.package_path = {root};
+  paths.use_ros_package_path = false;
+  std::string err;
+  EXPECT_EQ(resolve_resource("package://esc_pkg/meshes/../meshes/a.stl", paths, &err),
+            root + "/esc_pkg/meshes/a.stl")
+      << err;
+  for (const std::string uri :
+       {"package://esc_pkg/../outside.stl", "package://esc_pkg/meshes/../../outside.stl",
+        "package://esc_pkg/../../../../../../etc/hostname"}) {
+    err.clear();
+    EXPECT_EQ(resolve_resource(uri, paths, &err), "") << uri;
+    EXPECT_NE(err.find("leaves its package folder"), std::string::npos) << err;
+  }
+  err.clear();
+  EXPECT_EQ(resolve_resource("package://esc_pkg/meshes/dir.stl", paths, &err), "");
+  EXPECT_NE(err.find("is a directory"), std::string::npos) << err;
+  err.clear();
+  EXPECT_EQ(resolve_resource("/dev/zero", paths, &err), "");
+  EXPECT_NE(err.find("'/dev/zero' is a character device"), std::string::npos) << err;
+  EXPECT_TRUE(is_mesh_file_type("a.STL") && is_mesh_file_type("package://p/m.dae") &&
+              is_mesh_file_type("x.obj"));
+  EXPECT_FALSE(is_mesh_file_type("/etc/shadow") || is_mesh_file_type("package.xml.bak") ||
+               is_mesh_file_type("a.urdf"));
 }

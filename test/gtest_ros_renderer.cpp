@@ -360,25 +360,57 @@ TEST(RosRenderer, SceneMeshObjectsAreDrawnWithTheirTriangles) {
   EXPECT_EQ(stand_in[0].type, render::Marker::Type::Box);
   EXPECT_TRUE(stand_in[0].size3.isApprox(0.1 * scale));
 
-  // A flood of distinct resources: kept up to the cap, then stand-ins that are never read
-  // (the readable box under a new scale past the cap is not loaded either).
-  for (std::size_t k = meshes.size(); k < rr::MarkerMeshes::kMaxMeshes; ++k) {
+  // A flood of distinct resources: the cache keeps the kMaxMeshes most recently used. The box,
+  // sent again between them (as the simulator republishes its objects), is marked used each
+  // time and stays, without being read again; the oldest failure is evicted and is a stand-in
+  // until it is sent again.
+  for (std::size_t k = 0; k < 2 * rr::MarkerMeshes::kMaxMeshes; ++k) {
     visualization_msgs::Marker flood = missing;
     flood.mesh_resource = "file://" + (dir / ("flood" + std::to_string(k) + ".stl")).string();
     EXPECT_TRUE(meshes.load(flood));
+    EXPECT_FALSE(meshes.load(m));
+    ASSERT_LE(meshes.size(), rr::MarkerMeshes::kMaxMeshes);
   }
   EXPECT_EQ(meshes.size(), rr::MarkerMeshes::kMaxMeshes);
-  visualization_msgs::Marker late = m;
-  late.scale.x = 5;
-  EXPECT_TRUE(meshes.load(late, &warning));
-  EXPECT_NE(warning.find("distinct mesh resources"), std::string::npos) << warning;
-  visualization_msgs::Marker later = late;
-  later.scale.x = 6;
-  EXPECT_FALSE(meshes.load(later)) << "the cap is announced once";
-  EXPECT_EQ(meshes.size(), rr::MarkerMeshes::kMaxMeshes);
-  EXPECT_TRUE(meshes.failed(late));
-  EXPECT_TRUE(meshes.failed(later));
-  EXPECT_FALSE(meshes.find(m) == nullptr) << "meshes loaded before the cap stay";
+  EXPECT_LE(meshes.bytes(), rr::MarkerMeshes::kMaxBytes);
+  EXPECT_FALSE(meshes.find(m) == nullptr) << "the mesh in use stays";
+  EXPECT_TRUE(meshes.failed(missing)) << "evicted: drawn as a stand-in";
+  fs::remove_all(dir);
+}
+
+// Any node may publish on sim_markers: the renderer reads a marker's resource only when its
+// name is a mesh file type and a package:// name stays in its package, and its warnings are the
+// same for a file that does not exist and one that cannot be read as a mesh (a directory named
+// like a mesh here), so /rosout tells nothing about the file system.
+TEST(RosRenderer, MarkerMeshesReadOnlyMeshFilesInsideTheirPackage) {
+  rr::MarkerMeshes meshes(rr::ros_resolver());
+  visualization_msgs::Marker mk;
+  mk.type = visualization_msgs::Marker::MESH_RESOURCE;
+  mk.scale.x = mk.scale.y = mk.scale.z = 1;
+  auto warning_of = [&](const std::string& resource) {
+    mk.mesh_resource = resource;
+    ++mk.id;
+    std::string w;
+    EXPECT_TRUE(meshes.load(mk, &w)) << resource;
+    EXPECT_TRUE(meshes.failed(mk)) << resource;
+    return w;
+  };
+  for (const std::string r :
+       {"/etc/shadow", "file:///etc/passwd", "package://se3_sim/package.xml", "/etc/hostname"}) {
+    const std::string w = warning_of(r);
+    EXPECT_NE(w.find("not a mesh file type"), std::string::npos) << w;
+  }
+  for (const std::string r :
+       {"package://se3_sim/../../../../../../etc/shadow.stl", "package://se3_sim/a/../../x.dae"}) {
+    const std::string w = warning_of(r);
+    EXPECT_NE(w.find("leaves its package"), std::string::npos) << w;
+  }
+  const fs::path dir = fs::temp_directory_path() / ("se3_marker_probe_" + std::to_string(getpid()));
+  fs::create_directories(dir / "dir.stl");
+  const std::string missing = warning_of("file://" + (dir / "none.stl").string());
+  const std::string directory = warning_of("file://" + (dir / "dir.stl").string());
+  EXPECT_EQ(missing.substr(missing.find("' not drawn")),
+            directory.substr(directory.find("' not drawn")));
   fs::remove_all(dir);
 }
 

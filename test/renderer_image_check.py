@@ -229,6 +229,18 @@ class RendererImageTest(unittest.TestCase):
         self.assertNotEqual((r, g, b), self.px(before, u, v), "no stand-in drawn")
         self.assertLess(max(abs(r - g), abs(g - b)), 3, "the stand-in is not grey: %s" % ((r, g, b),))
 
+    def test_percent_conversions_in_a_colour_do_not_end_the_node(self):
+        """A robot_description with "%n" in a material's rgba (it crashed renderer_node):
+        the renderer of ns percent loads it and keeps publishing images."""
+        images = []
+        sub = rospy.Subscriber("percent/renderer/image", rospy.AnyMsg,
+                               lambda m: images.append(time.time()), queue_size=1)
+        end = time.time() + 30.0
+        while time.time() < end and len(images) < 3:
+            time.sleep(0.1)
+        sub.unregister()
+        self.assertGreaterEqual(len(images), 3, "percent/renderer/image stopped or never came")
+
     def test_zz_follow_frame(self):
         """Last (name order): it moves panda_link0."""
         self.publish_panda_tf()

@@ -105,6 +105,9 @@ struct TriangleMesh {
   bool closed = false;
   bool outward = true;
   std::string source;  ///< resolved path, or a description ("box", "<memory>.stl")
+  /// What the loader dropped or simplified, one line ("" when nothing): duplicate or degenerate
+  /// faces, smoothing skipped (its work bounded), a material file not read.
+  std::string warning;
 
   std::size_t triangle_count() const { return indices.size() / 3; }
 };
@@ -172,6 +175,16 @@ struct ResourcePaths {
 /// package not found, file not found). Thread-safe; package folders are cached.
 std::string resolve_resource(const std::string& uri, const ResourcePaths& paths,
                              std::string* error = nullptr);
+/// The file `rel` (the part of a package:// name after the package) inside the package folder
+/// `dir`: "" and a reason when, after lexical normalisation, it is absolute or starts with ".."
+/// (package://pkg/../../etc/x would leave the package). No file access.
+std::string package_file(const std::string& dir, const std::string& rel,
+                         std::string* error = nullptr);
+/// Whether the file's extension names a mesh format the loader reads (.stl, .dae, .obj, .ply,
+/// .off, .3ds, .fbx, .gltf, .glb, .3mf, .amf, .ac, .lwo, .ms3d where assimp has the importer;
+/// not assimp's generic names such as .xml); no file access. The renderer reads only such
+/// files for markers.
+bool is_mesh_file_type(const std::string& path);
 /// Folder of package `name` on the search path, or "".
 std::string find_package(const std::string& name, const ResourcePaths& paths);
 /// Splits "a:b:c" (ROS_PACKAGE_PATH syntax); empty entries dropped.
@@ -185,6 +198,10 @@ using ResourceResolver = std::function<std::string(const std::string& uri, std::
 
 /// Bounds on what a mesh file may make the loader do.
 struct MeshLimits {
+  /// Work of the normal smoothing and vertex joining (assimp's, quadratic in the number of
+  /// vertices at one position): the sum over distinct positions of (vertices there)^2, after
+  /// duplicate and degenerate faces are dropped. Beyond it the mesh keeps one normal a face.
+  std::size_t max_smoothing_work = 20'000'000;
   std::size_t max_bytes = std::size_t(256) << 20;  ///< file size
   std::size_t max_triangles = 20'000'000;
   /// load_mesh imports in a child process (POSIX fork), so that an importer that crashes on a
@@ -202,8 +219,11 @@ std::shared_ptr<TriangleMesh> decode_mesh(const void* data, std::size_t size,
                                           const std::string& hint, const MeshLimits& limits = {},
                                           std::string* error = nullptr);
 /// Loads a mesh file (an OBJ reads its .mtl beside it), in a child process unless
-/// limits.isolate is false. Cached by path: a second call returns the same mesh (a failure is
-/// cached too, with its reason). Thread-safe.
+/// limits.isolate is false. Only a regular file is read (a FIFO, device or directory is named
+/// as such in *error), and an OBJ's material files only if they are regular files in the
+/// mesh's folder or below (others: a line in TriangleMesh::warning, the default material).
+/// Cached by path: a second call returns the same mesh (a failure is cached too, with its
+/// reason); past 1024 paths the entries no one else holds are dropped. Thread-safe.
 std::shared_ptr<const TriangleMesh> load_mesh(const std::string& path, std::string* error = nullptr,
                                               const MeshLimits& limits = {});
 /// Empties the cache of load_mesh (meshes in use stay alive through their shared pointers).
@@ -224,14 +244,19 @@ struct GeometryOptions {
   MeshLimits limits;
 };
 
-/// Visual and collision geometry of `model` from the URDF text it was built from (link names
-/// are matched through model.links). Materials: a visual's inline <material><color>, or the
-/// robot-level material it names. Never throws for a missing or broken mesh (see above);
-/// throws ModelError if the text does not parse.
+/// Visual and collision geometry of `model` from the parsed URDF it was built from
+/// (model_from_urdf, model.h; link names are matched through model.links). Materials: a
+/// visual's inline <material><color>, or the robot-level material it names. Never throws for a
+/// missing or broken mesh (see above). Relative mesh names resolve against the folder of
+/// doc.file unless opt.paths.base_dir is set.
+GeometryModel geometry_from_urdf(const Model& model, const UrdfDocument& doc,
+                                 GeometryOptions opt = {});
+/// As above from URDF text (parsed again through parse_urdf_document; throws ModelError if it
+/// does not parse). Parse once and use geometry_from_urdf when the model is built too.
 GeometryModel geometry_from_urdf_string(const Model& model, const std::string& xml,
                                         const GeometryOptions& opt = {});
-/// As above from a file; relative mesh names resolve against the file's folder unless
-/// opt.paths.base_dir is set.
+/// As above from a file (read_urdf_document); relative mesh names resolve against the file's
+/// folder unless opt.paths.base_dir is set.
 GeometryModel geometry_from_urdf_file(const Model& model, const std::string& path,
                                       GeometryOptions opt = {});
 

@@ -56,4 +56,17 @@ constexpr std::size_t kMaxCsvBytes = 256u << 20;
 /// guards and the scene reader run over outside text before a parser sees it (src/model/utf8.cpp).
 std::size_t first_invalid_utf8(const std::string& s);
 
+/// The one reader of outside files (URDF, scene, SRDF, mesh, package.xml; src/model/files.cpp):
+/// only a regular file is read. The path is looked at with stat() first, then opened with
+/// O_NONBLOCK and checked again with fstat() on the open descriptor, so that neither a FIFO,
+/// a device nor a swap of the path between the two can block or have the read's side effects.
+/// Returns false and sets *why to what the path is instead ("not found", "a directory", "a FIFO
+/// (named pipe)", "a character device", "a block device", "a socket", "unreadable
+/// (Permission denied)", "N bytes, more than the M"). A file longer than max_bytes is refused
+/// unless `prefix`, which reads its first max_bytes only.
+bool read_file(const std::string& path, std::string& out, std::string* why,
+               std::size_t max_bytes = std::size_t(256) << 20, bool prefix = false);
+/// "" for a regular file that can be opened for reading, else what read_file would say.
+std::string not_a_regular_file(const std::string& path);
+
 }  // namespace se3

@@ -13,12 +13,17 @@
 // joint of a body for its coordinates, transform and motion subspace.
 #pragma once
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "se3_sim/lie.h"
+
+namespace urdf {
+class ModelInterface;
+}
 
 namespace se3 {
 
@@ -185,7 +190,30 @@ struct UrdfOptions {
   std::vector<std::pair<std::string, double>> locked;
 };
 
-/// Builds a model from URDF text. Throws ModelError with a one-line reason.
+/// A URDF parsed once, through the guards of src/model/urdf_guard.h (size, nesting and UTF-8
+/// before tinyxml; urdfdom's messages never formatted printf-style; its link tree released
+/// without recursion) and the quirk readings of src/model/urdf_quirks.h. The model
+/// (model_from_urdf) and the geometry (geometry_from_urdf, geometry.h) are both built from it;
+/// the document is shared and read-only.
+struct UrdfDocument {
+  std::shared_ptr<const urdf::ModelInterface> urdf;  ///< never null in a returned document
+  std::string file;                                  ///< the file it was read from ("" for text)
+  std::vector<std::string> warnings;                 ///< the quirks read, one line each
+  std::vector<std::string> complaints;               ///< what urdfdom said while accepting the text
+  /// Joints that move only massless links, with the position they are locked at.
+  std::vector<std::pair<std::string, double>> massless;
+};
+
+/// Parses URDF text. Throws ModelError with a one-line reason (refused text, urdfdom's error,
+/// a joint the dynamics cannot use).
+UrdfDocument parse_urdf_document(const std::string& xml);
+/// Reads and parses a URDF file: only a regular file is read (read_file, limits.h); every
+/// error names the file.
+UrdfDocument read_urdf_document(const std::string& path);
+
+/// Builds a model from a parsed URDF. Throws ModelError with a one-line reason.
+Model model_from_urdf(const UrdfDocument& doc, const UrdfOptions& opt = {});
+/// parse_urdf_document (or read_urdf_document), then model_from_urdf.
 Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt = {});
 Model model_from_urdf_file(const std::string& path, const UrdfOptions& opt = {});
 

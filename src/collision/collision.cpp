@@ -850,7 +850,11 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
     }
     if (o.shape.type == ShapeType::Mesh) {
       if (!o.shape.mesh || o.shape.mesh->triangle_count() == 0) {
-        throw std::invalid_argument("collision object '" + o.name + "': a mesh without triangles");
+        throw std::invalid_argument("collision object '" + o.name + "'" +
+                                    (o.link.empty() ? "" : " (link '" + o.link + "')") +
+                                    ": mesh '" +
+                                    (o.shape.path.empty() ? o.shape.resource : o.shape.path) +
+                                    "' has no triangles (not loaded)");
       }
       const std::array<double, 3> sc{o.shape.scale.x(), o.shape.scale.y(), o.shape.scale.z()};
       auto& h = hull_cache[{o.shape.mesh.get(), sc}];

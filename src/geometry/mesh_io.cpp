@@ -1,6 +1,7 @@
 // Mesh files through assimp: STL, Collada, OBJ (+ .mtl) and the rest assimp reads, into
 // TriangleMesh; the load cache (file loads in a child process, see isolated()); Collada's unit
 // and up axis the way RViz reads them.
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -10,19 +11,25 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <mutex>
+#include <type_traits>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "se3_sim/geometry.h"
+#include "se3_sim/limits.h"
 
 namespace se3 {
 namespace {
@@ -89,15 +96,252 @@ unsigned configure(Assimp::Importer& imp) {
   return aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType;
 }
 
+// ---- What assimp may read besides the bytes it is given
+//
+// An importer opens other files through its IOSystem: an OBJ its .mtl (`mtllib` names any
+// path), and a file read from memory is wrapped around the importer's IOSystem too. This one
+// reads only regular files (read_file, limits.h: never a FIFO or a device), at most the mesh
+// byte limit, and only inside `root` (the folder of the mesh and below; "" refuses every
+// file). What it refused is kept for the mesh's warning.
+class GuardedIO : public Assimp::IOSystem {
+ public:
+  GuardedIO(const std::string& root, std::size_t max_bytes) : max_bytes_(max_bytes) {
+    std::error_code ec;
+    if (!root.empty()) root_ = fs::weakly_canonical(root, ec);
+    if (ec) root_.clear();
+  }
+  bool Exists(const char* file) const override {
+    return file && inside(file) && not_a_regular_file(file).empty();
+  }
+  char getOsSeparator() const override { return '/'; }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (!file) return nullptr;
+    if (mode && (std::strchr(mode, 'w') || std::strchr(mode, 'a') || std::strchr(mode, '+'))) {
+      return nullptr;  // a loader writes nothing
+    }
+    if (!inside(file)) {
+      refuse(std::string("'") + file + "' is outside the mesh's folder");
+      return nullptr;
+    }
+    std::string text, why;
+    if (!read_file(file, text, &why, max_bytes_)) {
+      refuse(std::string("'") + file + "': " + why);
+      return nullptr;
+    }
+    auto* bytes = new uint8_t[text.size() + 1];
+    std::memcpy(bytes, text.data(), text.size());
+    return new Assimp::MemoryIOStream(bytes, text.size(), true);
+  }
+  void Close(Assimp::IOStream* stream) override { delete stream; }
+  const std::vector<std::string>& refused() const { return refused_; }
+
+ private:
+  bool inside(const char* file) const {
+    if (root_.empty()) return false;
+    std::error_code ec;
+    const fs::path p = fs::weakly_canonical(file, ec);
+    if (ec) return false;
+    const auto r = std::mismatch(root_.begin(), root_.end(), p.begin(), p.end());
+    return r.first == root_.end();
+  }
+  void refuse(const std::string& what) {
+    if (refused_.size() < 4 &&
+        std::find(refused_.begin(), refused_.end(), what) == refused_.end()) {
+      refused_.push_back(what);
+    }
+  }
+  fs::path root_;
+  std::size_t max_bytes_;
+  std::vector<std::string> refused_;
+};
+
+// Appends one clause to a mesh's one-line warning.
+void add_warning(std::string& warning, const std::string& what) {
+  if (what.empty()) return;
+  warning += (warning.empty() ? "" : "; ") + what;
+}
+
+// A vertex position as a hashable key (bit patterns: -0 and 0 differ, which only splits).
+struct PosKey {
+  uint32_t x, y, z;
+  bool operator==(const PosKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PosHash {
+  std::size_t operator()(const PosKey& k) const {
+    return (std::size_t(k.x) * 73856093u) ^ (std::size_t(k.y) * 19349663u) ^
+           (std::size_t(k.z) * 83492791u);
+  }
+};
+PosKey pos_key(const aiVector3D& v) {
+  PosKey k;
+  std::memcpy(&k.x, &v.x, 4);
+  std::memcpy(&k.y, &v.y, 4);
+  std::memcpy(&k.z, &v.z, 4);
+  return k;
+}
+
+// A face as its three position ids, rotated to start at the smallest (the same face in the
+// same winding has one key; its reverse, a back face, another).
+struct FaceKey {
+  uint32_t a, b, c;
+  bool operator==(const FaceKey& o) const { return a == o.a && b == o.b && c == o.c; }
+};
+struct FaceHash {
+  std::size_t operator()(const FaceKey& k) const {
+    return (std::size_t(k.a) * 2654435761u) ^ (std::size_t(k.b) * 40503u) ^ std::size_t(k.c);
+  }
+};
+
+// Drops the triangles of m that repeat an earlier one (same positions, same winding) or are
+// degenerate (two corners at one position), and the vertices no kept face uses; in linear
+// time. Meshes with bones or animation keep their vertices (their weights index them).
+// Returns the numbers dropped.
+std::pair<std::size_t, std::size_t> drop_repeated_faces(aiMesh* m) {
+  if (!m || !m->mVertices || !m->mFaces || m->mNumBones > 0 || m->mNumAnimMeshes > 0) return {};
+  std::unordered_map<PosKey, uint32_t, PosHash> ids;
+  ids.reserve(m->mNumVertices);
+  std::vector<uint32_t> id(m->mNumVertices);
+  for (unsigned v = 0; v < m->mNumVertices; ++v) {
+    id[v] = ids.emplace(pos_key(m->mVertices[v]), uint32_t(ids.size())).first->second;
+  }
+  std::unordered_map<FaceKey, char, FaceHash> seen;
+  std::size_t duplicate = 0, degenerate = 0;
+  unsigned kept = 0;
+  for (unsigned f = 0; f < m->mNumFaces; ++f) {
+    aiFace& face = m->mFaces[f];
+    bool drop = false;
+    if (face.mNumIndices == 3 && face.mIndices[0] < m->mNumVertices &&
+        face.mIndices[1] < m->mNumVertices && face.mIndices[2] < m->mNumVertices) {
+      uint32_t a = id[face.mIndices[0]], b = id[face.mIndices[1]], c = id[face.mIndices[2]];
+      if (a == b || b == c || a == c) {
+        drop = true;
+        ++degenerate;
+      } else {
+        while (a > b || a > c) {
+          const uint32_t t = a;
+          a = b, b = c, c = t;
+        }
+        if (!seen.emplace(FaceKey{a, b, c}, 0).second) {
+          drop = true;
+          ++duplicate;
+        }
+      }
+    }
+    if (drop) {
+      delete[] face.mIndices;
+      face.mIndices = nullptr;
+      face.mNumIndices = 0;
+      continue;
+    }
+    if (kept != f) {
+      std::swap(m->mFaces[kept].mIndices, face.mIndices);
+      std::swap(m->mFaces[kept].mNumIndices, face.mNumIndices);
+    }
+    ++kept;
+  }
+  if (duplicate + degenerate == 0) return {};
+  m->mNumFaces = kept;
+  // Keep only the vertices kept faces use, in their order.
+  std::vector<uint32_t> remap(m->mNumVertices, UINT32_MAX);
+  unsigned nv = 0;
+  for (unsigned f = 0; f < kept; ++f) {
+    aiFace& face = m->mFaces[f];
+    for (unsigned k = 0; k < face.mNumIndices; ++k) {
+      const unsigned v = face.mIndices[k];
+      if (v >= m->mNumVertices) continue;
+      if (remap[v] == UINT32_MAX) remap[v] = nv++;
+      face.mIndices[k] = remap[v];
+    }
+  }
+  auto compact = [&](auto*& array) {
+    if (!array) return;
+    using T = std::remove_pointer_t<std::remove_reference_t<decltype(array)>>;
+    T* out = new T[std::max(1u, nv)];
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+      if (remap[v] != UINT32_MAX) out[remap[v]] = array[v];
+    }
+    delete[] array;
+    array = out;
+  };
+  compact(m->mVertices);
+  compact(m->mNormals);
+  compact(m->mTangents);
+  compact(m->mBitangents);
+  for (auto& c : m->mColors) compact(c);
+  for (auto& t : m->mTextureCoords) compact(t);
+  m->mNumVertices = nv;
+  return {duplicate, degenerate};
+}
+
+// What assimp's smoothing and joining cost (they look, for each vertex, at every vertex at its
+// position): the sum over positions of the count squared.
+std::size_t smoothing_work(const aiMesh* m) {
+  if (!m || !m->mVertices) return 0;
+  std::unordered_map<PosKey, std::size_t, PosHash> count;
+  count.reserve(m->mNumVertices);
+  std::size_t work = 0;
+  for (unsigned v = 0; v < m->mNumVertices; ++v) {
+    const std::size_t c = ++count[pos_key(m->mVertices[v])];
+    work += 2 * c - 1;  // c^2 - (c - 1)^2
+  }
+  return work;
+}
+
+// Per-vertex normals summed from the area-weighted normals of the faces using each vertex, in
+// linear time: the stand-in for assimp's smoothing when its work is beyond the bound (on a
+// mesh whose vertices are one per face corner, as OBJ and STL import them, each face is flat).
+void face_normals(aiMesh* m) {
+  delete[] m->mNormals;
+  m->mNormals = new aiVector3D[std::max(1u, m->mNumVertices)]();
+  for (unsigned f = 0; f < m->mNumFaces; ++f) {
+    const aiFace& face = m->mFaces[f];
+    if (face.mNumIndices != 3) continue;
+    const unsigned a = face.mIndices[0], b = face.mIndices[1], c = face.mIndices[2];
+    if (a >= m->mNumVertices || b >= m->mNumVertices || c >= m->mNumVertices) continue;
+    const aiVector3D n = (m->mVertices[b] - m->mVertices[a]) ^ (m->mVertices[c] - m->mVertices[a]);
+    m->mNormals[a] += n;
+    m->mNormals[b] += n;
+    m->mNormals[c] += n;
+  }
+}
+
 // Second pass: meshes without normals, or with one normal a face (every STL, and CAD exports
 // such as the Panda's Collada files), get smooth per-vertex normals; then vertices that are
 // equal in everything are joined (a flat-shaded file has three vertices a triangle).
-void smooth_and_join(Assimp::Importer& imp) {
+// Smoothing and joining are quadratic in the vertices that share one position (30,000 copies
+// of one triangle, a fan of 30,000 triangles): when their work is beyond
+// limits.max_smoothing_work, repeated and degenerate faces are dropped first, and if that is
+// not enough each face keeps its own normal. Returns what it did, for the mesh's warning (""
+// when nothing).
+std::string smooth_and_join(Assimp::Importer& imp, const MeshLimits& limits) {
   aiScene* scene = const_cast<aiScene*>(imp.GetScene());
-  if (!scene) return;
+  if (!scene) return "";
+  std::string warning;
+  std::size_t work = 0;
+  for (unsigned k = 0; k < scene->mNumMeshes; ++k) work += smoothing_work(scene->mMeshes[k]);
+  if (work > limits.max_smoothing_work) {
+    // Only then (an ordinary mesh is left exactly as assimp reads it): repeated and degenerate
+    // faces out, and the work counted again.
+    std::size_t duplicate = 0, degenerate = 0;
+    work = 0;
+    for (unsigned k = 0; k < scene->mNumMeshes; ++k) {
+      const auto dropped = drop_repeated_faces(scene->mMeshes[k]);
+      duplicate += dropped.first;
+      degenerate += dropped.second;
+      work += smoothing_work(scene->mMeshes[k]);
+    }
+    if (duplicate) add_warning(warning, std::to_string(duplicate) + " duplicate faces dropped");
+    if (degenerate) {
+      add_warning(warning, std::to_string(degenerate) + " degenerate faces dropped");
+    }
+  }
+  const bool bounded = work > limits.max_smoothing_work;
   for (unsigned k = 0; k < scene->mNumMeshes; ++k) {
     aiMesh* m = scene->mMeshes[k];
-    if (!m || !m->mNormals) continue;
+    if (!m || !m->mNormals) {
+      if (m && bounded) face_normals(m);
+      continue;
+    }
     unsigned flat = 0, faces = 0;
     for (unsigned f = 0; f < m->mNumFaces; ++f) {
       const aiFace& face = m->mFaces[f];
@@ -111,9 +355,18 @@ void smooth_and_join(Assimp::Importer& imp) {
     if (faces && flat >= faces - faces / 10) {
       delete[] m->mNormals;
       m->mNormals = nullptr;
+      if (bounded) face_normals(m);
     }
   }
+  if (bounded) {
+    add_warning(warning, "normals not smoothed: " + std::to_string(work) +
+                             " vertex pairs at shared positions, more than the " +
+                             std::to_string(limits.max_smoothing_work) +
+                             " of MeshLimits::max_smoothing_work (faces drawn flat)");
+    return warning;
+  }
   imp.ApplyPostProcessing(aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices);
+  return warning;
 }
 
 bool finite3(const aiVector3D& v) {
@@ -285,6 +538,7 @@ std::string serialize(const TriangleMesh* m, const std::string& error) {
   put_pod(b, m->upper);
   put_pod(b, uint8_t(m->closed));
   put_pod(b, uint8_t(m->outward));
+  put_str(b, m->warning);
   return b;
 }
 
@@ -359,6 +613,7 @@ std::shared_ptr<TriangleMesh> deserialize(const std::string& b, std::string* err
   m->upper = r.pod<Vec3f>();
   m->closed = r.pod<uint8_t>() != 0;
   m->outward = r.pod<uint8_t>() != 0;
+  m->warning = r.str();
   bool sane = r.ok && r.at == b.size() && m->normals.size() == m->positions.size() &&
               (m->colors.empty() || m->colors.size() == m->positions.size());
   for (uint32_t i : m->indices) sane = sane && i < m->positions.size();
@@ -445,6 +700,9 @@ struct CacheEntry {
 };
 std::mutex g_cache_mutex;
 std::map<std::string, CacheEntry> g_cache;
+// Paths kept at most before the entries no one else holds are dropped (a publisher of ever new
+// marker resources must not grow it without end).
+constexpr std::size_t kMaxCached = 1024;
 
 }  // namespace
 
@@ -465,13 +723,18 @@ std::shared_ptr<TriangleMesh> decode_mesh(const void* data, std::size_t size,
   if ((hint == "stl" || hint == "stlb") && !check_stl(bytes, size, limits, error)) return nullptr;
   try {
     Assimp::Importer imp;
+    // From memory no other file is read (an OBJ's mtllib, a Collada reference): the memory
+    // wrapper hands other names to this IOSystem, which refuses them all.
+    imp.SetIOHandler(new GuardedIO("", limits.max_bytes));
     const unsigned flags = configure(imp);
     if (!imp.ReadFileFromMemory(data, size, flags, hint.c_str())) {
       const std::string why = imp.GetErrorString();
       return fail(why.empty() ? std::string("assimp could not read it") : "assimp: " + why);
     }
-    smooth_and_join(imp);
-    return mesh_from_scene(imp.GetScene(), hint, limits, error);
+    const std::string warning = smooth_and_join(imp, limits);
+    auto m = mesh_from_scene(imp.GetScene(), hint, limits, error);
+    if (m) m->warning = warning;
+    return m;
   } catch (const std::exception& e) {
     return fail(std::string("assimp: ") + e.what());
   } catch (...) {
@@ -489,33 +752,37 @@ std::shared_ptr<const TriangleMesh> load_mesh(const std::string& path, std::stri
   if (it == g_cache.end()) {
     CacheEntry e;
     const std::string ext = extension_of(key);
-    const auto size = fs::file_size(key, ec);
-    if (ec) {
-      e.error = "cannot read '" + key + "'";
-    } else if (size > limits.max_bytes) {
-      e.error = "'" + key + "' has " + std::to_string(size) + " bytes (more than the limit of " +
-                std::to_string(limits.max_bytes) + ")";
+    // Only a regular file is read (a FIFO or a device is named as such, never opened to block).
+    const std::string what = not_a_regular_file(key);
+    if (!what.empty()) {
+      e.error = "'" + key + "': " + what;
     } else {
       auto make = [&](std::string* err) -> std::shared_ptr<TriangleMesh> {
         if (ext == "obj") {
-          // Through the file system, so that the .mtl beside it is read.
+          // Through the file system, so that the .mtl beside it is read: only regular files in
+          // the mesh's folder and below (GuardedIO).
           try {
             Assimp::Importer imp;
+            auto* io = new GuardedIO(fs::path(key).parent_path().string(), limits.max_bytes);
+            imp.SetIOHandler(io);  // owned by imp
             if (!imp.ReadFile(key, configure(imp))) {
               if (err) *err = std::string("assimp: ") + imp.GetErrorString();
+              if (err && !io->refused().empty()) *err += " (" + io->refused()[0] + ")";
               return nullptr;
             }
-            smooth_and_join(imp);
-            return mesh_from_scene(imp.GetScene(), ext, limits, err);
+            std::string warning = smooth_and_join(imp, limits);
+            for (const std::string& r : io->refused()) add_warning(warning, "not read: " + r);
+            auto m = mesh_from_scene(imp.GetScene(), ext, limits, err);
+            if (m) m->warning = warning;
+            return m;
           } catch (const std::exception& x) {
             if (err) *err = std::string("assimp: ") + x.what();
             return nullptr;
           }
         }
-        std::ifstream in(key, std::ios::binary);
-        std::vector<char> bytes(size);
-        if (!in || !in.read(bytes.data(), std::streamsize(size))) {
-          if (err) *err = "cannot read '" + key + "'";
+        std::string bytes, why;
+        if (!read_file(key, bytes, &why, limits.max_bytes)) {
+          if (err) *err = "'" + key + "': " + why;
           return nullptr;
         }
         return decode_mesh(bytes.data(), bytes.size(), ext, limits, err);
@@ -525,10 +792,29 @@ std::shared_ptr<const TriangleMesh> load_mesh(const std::string& path, std::stri
       e.mesh = m;
     }
     if (e.mesh) e.error.clear();
+    if (g_cache.size() >= kMaxCached) {
+      // Bounded: what only the cache holds (failures, meshes no one uses) goes first.
+      for (auto c = g_cache.begin(); c != g_cache.end();) {
+        c = !c->second.mesh || c->second.mesh.use_count() == 1 ? g_cache.erase(c) : std::next(c);
+      }
+    }
     it = g_cache.emplace(key, std::move(e)).first;
   }
   if (!it->second.mesh && error) *error = it->second.error;
   return it->second.mesh;
+}
+
+bool is_mesh_file_type(const std::string& path) {
+  // Formats of meshes (not assimp's generic names such as .xml, .raw or .x), where assimp has
+  // the importer.
+  static const char* const kMeshTypes[] = {"stl",  "dae", "obj", "ply", "off", "3ds", "fbx",
+                                           "gltf", "glb", "3mf", "amf", "ac",  "lwo", "ms3d"};
+  const std::string ext = extension_of(path);
+  if (std::find(std::begin(kMeshTypes), std::end(kMeshTypes), ext) == std::end(kMeshTypes)) {
+    return false;
+  }
+  static const Assimp::Importer probe;
+  return probe.IsExtensionSupported("." + ext);
 }
 
 void clear_mesh_cache() {
@@ -554,7 +840,8 @@ bool load_mesh_shape(const std::string& uri, const Vec3& scale, const ResourceRe
   }
   out.mesh = load_mesh(out.path, &err);
   if (!out.mesh) {
-    if (error) *error = "'" + out.path + "': " + err;
+    const bool named = err.compare(0, out.path.size() + 2, "'" + out.path + "'") == 0;
+    if (error) *error = named ? err : "'" + out.path + "': " + err;
     return false;
   }
   return true;

@@ -2,13 +2,13 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
 
 #include "se3_sim/geometry.h"
+#include "se3_sim/limits.h"
 
 namespace se3 {
 namespace {
@@ -17,11 +17,8 @@ namespace fs = std::filesystem;
 
 // The <name> of a package.xml, or "".
 std::string package_name(const fs::path& manifest) {
-  std::ifstream in(manifest);
-  if (!in) return "";
-  std::string text(4096, '\0');  // the name comes early; a huge file is not read whole
-  in.read(&text[0], std::streamsize(text.size()));
-  text.resize(std::size_t(in.gcount()));
+  std::string text;  // the name comes early; a huge file is not read whole
+  if (!read_file(manifest.string(), text, nullptr, 4096, true)) return "";
   const std::size_t a = text.find("<name>");
   if (a == std::string::npos) return "";
   const std::size_t b = text.find("</name>", a);
@@ -98,9 +95,11 @@ std::vector<std::string> search_roots(const ResourcePaths& paths) {
   return roots;
 }
 
-bool is_file(const std::string& p) {
-  std::error_code ec;
-  return fs::is_regular_file(p, ec);
+// "" when p is a regular file that can be read, else "file 'p' " and what it is.
+std::string not_a_file(const std::string& p) {
+  const std::string what = not_a_regular_file(p);
+  if (what.empty()) return "";
+  return "file '" + p + "' " + (what == "not found" ? what : "is " + what);
 }
 
 }  // namespace
@@ -113,6 +112,15 @@ std::vector<std::string> split_path_list(const std::string& list) {
     if (!item.empty()) out.push_back(item);
   }
   return out;
+}
+
+std::string package_file(const std::string& dir, const std::string& rel, std::string* error) {
+  const fs::path norm = fs::path(rel).lexically_normal();
+  if (norm.is_absolute() || (!norm.empty() && *norm.begin() == "..")) {
+    if (error) *error = "'" + rel + "' leaves its package folder '" + dir + "' (a '..' escape)";
+    return "";
+  }
+  return norm.empty() || norm == "." ? dir : (fs::path(dir) / norm).string();
 }
 
 std::string find_package(const std::string& name, const ResourcePaths& paths) {
@@ -146,8 +154,11 @@ std::string resolve_resource(const std::string& uri, const ResourcePaths& paths,
       return fail("package '" + pkg + "' not found on the package path (" +
                   (where.empty() ? std::string("empty; set ROS_PACKAGE_PATH") : where) + ")");
     }
-    path = dir + (slash == std::string::npos ? std::string() : uri.substr(slash));
-    if (!is_file(path)) return fail("file '" + path + "' not found (package '" + pkg + "')");
+    path = package_file(dir, slash == std::string::npos ? std::string() : uri.substr(slash + 1),
+                        error);
+    if (path.empty()) return "";
+    const std::string bad = not_a_file(path);
+    if (!bad.empty()) return fail(bad + " (package '" + pkg + "')");
     return path;
   }
   if (uri.compare(0, 7, "file://") == 0) {
@@ -165,7 +176,8 @@ std::string resolve_resource(const std::string& uri, const ResourcePaths& paths,
     }
     path = (fs::path(paths.base_dir) / uri).string();
   }
-  if (!is_file(path)) return fail("file '" + path + "' not found");
+  const std::string bad = not_a_file(path);
+  if (!bad.empty()) return fail(bad);
   return path;
 }
 

@@ -1,16 +1,13 @@
 // GeometryModel from URDF: the visual and collision elements of every link, placed on the
 // Model's bodies through model.links, with materials, meshes loaded through the resolver and
 // stand-ins (with one warning each) for meshes that cannot be loaded.
-#include <console_bridge/console.h>
-#include <urdf_parser/urdf_parser.h>
+#include <urdf_model/model.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <mutex>
-#include <sstream>
+#include <utility>
 
 #include "se3_sim/geometry.h"
 
@@ -18,16 +15,6 @@ namespace se3 {
 namespace {
 
 namespace fs = std::filesystem;
-
-class QuietHandler : public console_bridge::OutputHandler {
- public:
-  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty())
-      first_error = text;
-  }
-  std::string first_error;
-};
-std::mutex g_console_mutex;
 
 SE3 to_se3(const urdf::Pose& p) {
   double x, y, z, w;
@@ -98,7 +85,9 @@ struct Builder {
         }
         o.shape.mesh = load_mesh(o.shape.path, &err, opt.limits);
         if (!o.shape.mesh) {
-          *why = "'" + o.shape.path + "': " + err;
+          *why = err.compare(0, o.shape.path.size() + 2, "'" + o.shape.path + "'") == 0
+                     ? err
+                     : "'" + o.shape.path + "': " + err;
           return false;
         }
         return true;
@@ -136,6 +125,11 @@ struct Builder {
           o.material.has_color = true;
         }
       }
+    }
+    if (ok && o.shape.mesh && !o.shape.mesh->warning.empty()) {
+      g.warnings.push_back(std::string("link '") + link +
+                           "': " + (visual ? "visual" : "collision") + " mesh '" +
+                           o.shape.resource + "': " + o.shape.mesh->warning);
     }
     if (!ok) {
       o.stand_in = true;
@@ -208,26 +202,12 @@ struct Builder {
 
 }  // namespace
 
-GeometryModel geometry_from_urdf_string(const Model& model, const std::string& xml,
-                                        const GeometryOptions& opt) {
-  urdf::ModelInterfaceSharedPtr u;
-  std::string err;
-  {
-    std::lock_guard<std::mutex> lock(g_console_mutex);
-    QuietHandler h;
-    console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
-    console_bridge::useOutputHandler(&h);
-    try {
-      u = urdf::parseURDF(xml);
-    } catch (const std::exception& e) {
-      h.first_error = e.what();
-    }
-    console_bridge::useOutputHandler(previous);
-    err = h.first_error;
+GeometryModel geometry_from_urdf(const Model& model, const UrdfDocument& doc, GeometryOptions opt) {
+  if (!doc.urdf) throw ModelError("URDF: no document");
+  if (opt.paths.base_dir.empty() && !doc.file.empty()) {
+    opt.paths.base_dir = fs::absolute(fs::path(doc.file)).parent_path().string();
   }
-  if (!u) throw ModelError("URDF rejected by urdfdom: " + (err.empty() ? "parse error" : err));
-
-  Builder b{model, *u, opt, {}, {}};
+  Builder b{model, *doc.urdf, opt, {}, {}};
   // Stand-in capsules scale with the robot: a fifth of its typical joint spacing.
   double sum = 0;
   int cnt = 0;
@@ -257,16 +237,14 @@ GeometryModel geometry_from_urdf_string(const Model& model, const std::string& x
   return std::move(b.g);
 }
 
+GeometryModel geometry_from_urdf_string(const Model& model, const std::string& xml,
+                                        const GeometryOptions& opt) {
+  return geometry_from_urdf(model, parse_urdf_document(xml), opt);
+}
+
 GeometryModel geometry_from_urdf_file(const Model& model, const std::string& path,
                                       GeometryOptions opt) {
-  std::ifstream f(path);
-  if (!f) throw ModelError("cannot read URDF file '" + path + "'");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  if (opt.paths.base_dir.empty()) {
-    opt.paths.base_dir = fs::absolute(fs::path(path)).parent_path().string();
-  }
-  return geometry_from_urdf_string(model, ss.str(), opt);
+  return geometry_from_urdf(model, read_urdf_document(path), std::move(opt));
 }
 
 }  // namespace se3

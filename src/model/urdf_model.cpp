@@ -4,8 +4,8 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -235,30 +235,69 @@ const urdf::Link& base_link(const urdf::ModelInterface& u, const urdf::Link& roo
 
 }  // namespace
 
-Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options) {
+namespace {
+
+// Owns a parsed URDF; releases its link tree without recursion (UrdfRelease).
+struct UrdfOwner {
+  urdf::ModelInterfaceSharedPtr u;
+  ~UrdfOwner() { const UrdfRelease release(u); }
+};
+
+}  // namespace
+
+UrdfDocument parse_urdf_document(const std::string& xml) {
   check_urdf_text(xml);  // urdf_guard.h: size and nesting before tinyxml recurses
-  std::vector<std::string> quirks;
-  const std::string text = urdf_text_quirks(xml, quirks);  // urdf_quirks.h
+  UrdfDocument doc;
+  const std::string text = urdf_text_quirks(xml, doc.warnings);  // urdf_quirks.h
   std::string err;
-  std::vector<std::string> complaints;
-  urdf::ModelInterfaceSharedPtr u = parse_urdf(text, err, &complaints);
-  if (!u) throw ModelError("URDF rejected by urdfdom: " + err);
-  const UrdfRelease release(u);
-  check_urdf_joints(*u);
-  const urdf::LinkConstSharedPtr root = u->getRoot();
+  auto owner = std::make_shared<UrdfOwner>();
+  owner->u = parse_urdf(text, err, &doc.complaints);
+  if (!owner->u) throw ModelError("URDF rejected by urdfdom: " + err);
+  check_urdf_joints(*owner->u);
+  if (!owner->u->getRoot()) throw ModelError("URDF has no root link");
+  // Joints that move only massless links: locked (with the user's locks, in model_from_urdf).
+  urdf_model_quirks(*owner->u, doc.massless, doc.warnings);
+  doc.urdf = std::shared_ptr<const urdf::ModelInterface>(owner, owner->u.get());
+  return doc;
+}
+
+UrdfDocument read_urdf_document(const std::string& path) {
+  std::string text, why;
+  if (!read_file(path, text, &why, limits::kMaxUrdfBytes)) {
+    const bool big = why.find(" bytes, more than the ") != std::string::npos;
+    throw ModelError((big ? "URDF file '" : "cannot read URDF file '") + path + "': " + why +
+                     (big ? " bytes a URDF may have; see the limits in docs/robustness.md" : ""));
+  }
+  try {
+    UrdfDocument doc = parse_urdf_document(text);
+    doc.file = path;
+    return doc;
+  } catch (const ModelError& e) {
+    throw ModelError("URDF file '" + path + "': " + e.what());
+  }
+}
+
+Model model_from_urdf(const UrdfDocument& doc, const UrdfOptions& options) {
+  if (!doc.urdf) throw ModelError("URDF: no document");
+  const urdf::ModelInterface& u = *doc.urdf;
+  const urdf::LinkConstSharedPtr root = u.getRoot();
   if (!root) throw ModelError("URDF has no root link");
 
   UrdfOptions opt = options;
-  urdf_model_quirks(*u, opt.locked, quirks);  // joints that move only massless links: locked
-  Builder b{*u, opt, Model{}, {}};
+  for (const auto& kv : doc.massless) {
+    const bool given = std::any_of(opt.locked.begin(), opt.locked.end(),
+                                   [&](const auto& l) { return l.first == kv.first; });
+    if (!given) opt.locked.push_back(kv);
+  }
+  Builder b{u, opt, Model{}, {}};
   for (const auto& kv : opt.locked) b.locked.emplace(kv.first, kv.second);
-  b.m.warnings = quirks;
+  b.m.warnings = doc.warnings;
   Model& m = b.m;
-  m.name = u->getName();
+  m.name = u.getName();
   m.floating = opt.floating;
   m.start_with_base(frame_name(root->name));
-  for (const auto& c : complaints) m.warnings.push_back("urdfdom: " + c);
-  const urdf::Link& start = base_link(*u, *root, m);
+  for (const auto& c : doc.complaints) m.warnings.push_back("urdfdom: " + c);
+  const urdf::Link& start = base_link(u, *root, m);
   m.root_link = m.body_name[0] = frame_name(start.name);
   b.visit(start, 0, SE3());
   // Every moving body (and a free base) must have a positive-definite spatial inertia, eq. (23),
@@ -273,7 +312,7 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options)
     }
   }
   for (const auto& kv : opt.locked) {
-    if (!u->getJoint(kv.first)) {
+    if (!u.getJoint(kv.first)) {
       throw ModelError("locked joint '" + kv.first + "' is not in the URDF");
     }
   }
@@ -283,22 +322,12 @@ Model model_from_urdf_string(const std::string& xml, const UrdfOptions& options)
   return m;
 }
 
+Model model_from_urdf_string(const std::string& xml, const UrdfOptions& opt) {
+  return model_from_urdf(parse_urdf_document(xml), opt);
+}
+
 Model model_from_urdf_file(const std::string& path, const UrdfOptions& opt) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw ModelError("cannot read URDF file '" + path + "'");
-  // Read in pieces, so that a huge file or a device (/dev/zero) stops at the size limit.
-  std::string text;
-  char buf[1 << 16];
-  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
-    text.append(buf, static_cast<size_t>(f.gcount()));
-    if (text.size() > limits::kMaxUrdfBytes) {
-      throw ModelError("URDF file '" + path + "': more than the " +
-                       std::to_string(limits::kMaxUrdfBytes) +
-                       " bytes a URDF may have; see the limits in docs/robustness.md");
-    }
-  }
-  if (f.bad()) throw ModelError("cannot read URDF file '" + path + "'");
-  return model_from_urdf_string(text, opt);
+  return model_from_urdf(read_urdf_document(path), opt);
 }
 
 }  // namespace se3

@@ -140,10 +140,11 @@ class RendererNode {
       // accepts robots whose root link is massless (which a free base must not be).
       se3::UrdfOptions opt;
       opt.floating = false;
-      auto m = std::make_unique<se3::Model>(se3::model_from_urdf_string(xml, opt));
+      const se3::UrdfDocument doc = se3::parse_urdf_document(xml);  // once, for both
+      auto m = std::make_unique<se3::Model>(se3::model_from_urdf(doc, opt));
       se3::GeometryOptions gopt;
       gopt.resolver = rr::ros_resolver();
-      const se3::GeometryModel geometry = se3::geometry_from_urdf_string(*m, xml, gopt);
+      const se3::GeometryModel geometry = se3::geometry_from_urdf(*m, doc, gopt);
       for (const std::string& w : geometry.warnings) ROS_WARN("renderer: %s", w.c_str());
       renderer_->set_model(*m, geometry, draw_);
       poses_.assign(m->parent.size(),

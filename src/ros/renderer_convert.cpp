@@ -77,35 +77,46 @@ MarkerMeshes::KeyRef MarkerMeshes::key(const visualization_msgs::Marker& m) {
 bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warning) {
   if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return false;
   const KeyRef k = key(m);
-  if (meshes_.find(k) != meshes_.end()) return false;
-  if (meshes_.size() >= kMaxMeshes) {
-    // A publisher that sends ever new resources must not make the node read (and keep)
-    // meshes without end: beyond the cap every new one is a stand-in, never read; one warning.
-    if (capped_) return false;
-    capped_ = true;
-    if (warning) {
-      *warning = "marker " + m.ns + "/" + std::to_string(m.id) + ": mesh '" + m.mesh_resource +
-                 "' not read: more than " + std::to_string(kMaxMeshes) +
-                 " distinct mesh resources and scales; new ones are drawn as stand-in cubes";
-    }
-    return true;
+  const auto found = meshes_.find(k);
+  if (found != meshes_.end()) {
+    used_.splice(used_.begin(), used_, found->second.used);  // most recently used
+    return false;
   }
   const Vec3 scale(m.scale.x, m.scale.y, m.scale.z);
   std::string err;
   Shape shape;
+  std::shared_ptr<const render::RenderMesh> mesh;
+  // Checks of the name alone first: nothing is looked up on disk for a name that fails them.
   if (!scale.allFinite() || !(scale.cwiseAbs().minCoeff() > 0)) {
     err = "scale is not finite and non-zero";
   } else if (m.mesh_resource.empty()) {
     err = "no mesh_resource";
+  } else if (!is_mesh_file_type(m.mesh_resource)) {
+    err = "not a mesh file type (by its extension: .stl, .dae, .obj, .ply, ...)";
+  } else if (m.mesh_resource.compare(0, 10, "package://") == 0 &&
+             package_file("", m.mesh_resource.substr(std::min(m.mesh_resource.size(),
+                                                              m.mesh_resource.find('/', 10) + 1)))
+                 .empty()) {
+    err = "it leaves its package (a '..' escape)";
   } else if (load_mesh_shape(m.mesh_resource, scale, resolver_, shape, &err) && shape.mesh &&
              shape.mesh->triangle_count() > 0) {
-    meshes_[Key(k)] = std::make_shared<render::RenderMesh>(
+    mesh = std::make_shared<render::RenderMesh>(
         render::make_render_mesh(*shape.mesh, scale, Eigen::Vector3f::Constant(0.75f), opt_));
-    return false;
-  } else if (err.empty()) {
-    err = "the mesh has no triangles";
+  } else {
+    // The same words whatever the reason, so that /rosout does not tell whether a file exists.
+    err = "not found, not readable or not a mesh";
   }
-  meshes_[Key(k)] = nullptr;
+  std::size_t bytes = m.mesh_resource.size() + sizeof(Entry);
+  if (mesh) {
+    bytes += sizeof(float) * 6 * mesh->px.size() + sizeof(uint32_t) * mesh->indices.size() +
+             sizeof(render::RenderMesh::Run) * mesh->runs.size();
+  }
+  const auto ins = meshes_.emplace(Key(k), Entry{mesh, bytes, used_.end()}).first;
+  used_.push_front(&ins->first);
+  ins->second.used = used_.begin();
+  bytes_ += bytes;
+  evict();
+  if (mesh) return false;
   if (warning) {
     *warning = "marker " + m.ns + "/" + std::to_string(m.id) + ": mesh '" + m.mesh_resource +
                "' not drawn (" + err + "); a stand-in cube is drawn instead";
@@ -113,15 +124,26 @@ bool MarkerMeshes::load(const visualization_msgs::Marker& m, std::string* warnin
   return true;
 }
 
+void MarkerMeshes::evict() {
+  // Least recently used first; the newest entry stays even when it alone is over the bounds.
+  while (used_.size() > 1 && (meshes_.size() > kMaxMeshes || bytes_ > kMaxBytes)) {
+    const auto it = meshes_.find(*used_.back());
+    used_.pop_back();
+    if (it == meshes_.end()) continue;
+    bytes_ -= it->second.bytes;
+    meshes_.erase(it);
+  }
+}
+
 MarkerMeshes::Lookup MarkerMeshes::lookup(const visualization_msgs::Marker& m) const {
   Lookup out;
   if (m.type != visualization_msgs::Marker::MESH_RESOURCE) return out;
   const auto it = meshes_.find(key(m));
   if (it == meshes_.end()) {
-    out.stand_in = meshes_.size() >= kMaxMeshes;
+    out.stand_in = true;  // evicted (SimMarkers::apply loads every mesh marker it keeps)
   } else {
-    out.mesh = it->second;
-    out.stand_in = !it->second;
+    out.mesh = it->second.mesh;
+    out.stand_in = !it->second.mesh;
   }
   return out;
 }
@@ -409,7 +431,9 @@ ResourceResolver ros_resolver(const std::string& base_dir) {
         if (error) *error = "package '" + pkg + "' not found by rospack (ROS_PACKAGE_PATH)";
         return "";
       }
-      const std::string path = dir + (slash == std::string::npos ? "" : uri.substr(slash));
+      const std::string path =
+          package_file(dir, slash == std::string::npos ? "" : uri.substr(slash + 1), error);
+      if (path.empty()) return "";
       // The library resolver checks that the file exists (a plain path now).
       ResourcePaths none;
       none.use_ros_package_path = false;

@@ -34,6 +34,7 @@
 #include "se3_sim/Step.h"
 #include "se3_sim/format.h"
 #include "se3_sim/gain_check.h"
+#include "se3_sim/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/sim.h"
@@ -49,12 +50,13 @@ double seconds(Clock::duration d) {
   return std::chrono::duration<double>(d).count();
 }
 
+// A robot file (se3::read_file: regular files only, never blocking on a FIFO).
 std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  std::string text, why;
+  if (!se3::read_file(path, text, &why, se3::limits::kMaxUrdfBytes)) {
+    throw std::runtime_error("cannot read URDF file '" + path + "': " + why);
+  }
+  return text;
 }
 
 double finite_or_zero(double x) {
@@ -62,8 +64,7 @@ double finite_or_zero(double x) {
 }
 
 bool file_exists(const std::string& path) {
-  std::ifstream in(path);
-  return static_cast<bool>(in);
+  return se3::not_a_regular_file(path).empty();
 }
 
 // "gx gy gz", "[gx, gy, gz]" or "gx,gy,gz": three finite numbers.

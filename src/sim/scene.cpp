@@ -271,20 +271,14 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
 }
 
 Scene load_scene(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-    throw SceneError("cannot read scene file '" + path + "'");
+  std::string text, why;
+  if (!read_file(path, text, &why, limits::kMaxSceneBytes)) {
+    if (why.find(" bytes, more than the ") != std::string::npos) {
+      throw SceneError(path + ": " + why + " a scene may have (docs/robustness.md)");
+    }
+    throw SceneError("cannot read scene file '" + path + "': " + why);
   }
-  if (static_cast<std::uint64_t>(st.st_size) > limits::kMaxSceneBytes) {
-    throw SceneError(path + ": " + std::to_string(st.st_size) + " bytes, more than the " +
-                     std::to_string(limits::kMaxSceneBytes) +
-                     " a scene may have (docs/robustness.md)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError("cannot read scene file '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_scene(ss.str(), dir_of(path), path);
+  return parse_scene(text, dir_of(path), path);
 }
 
 Model scene_model(const Scene& scene, const std::string& urdf_xml) {

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "se3_sim/limits.h"
+
 namespace se3 {
 namespace {
 
@@ -15,11 +17,11 @@ std::string scene_name(const Scene& s) {
 }
 
 std::string read_text(const std::string& path, const Scene& scene) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(scene_name(scene) + ": cannot read srdf '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  std::string text, why;
+  if (!read_file(path, text, &why, limits::kMaxUrdfBytes)) {
+    throw SceneError(scene_name(scene) + ": cannot read srdf '" + path + "': " + why);
+  }
+  return text;
 }
 
 // The nearest folder at or above the scene's that holds package.xml ("" if none): se3_sim's
@@ -65,6 +67,17 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
     warnings = geometry->warnings;
     for (const GeometryObject& g : geometry->collisions) {
       if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
+      if (g.shape.type == ShapeType::Mesh &&
+          (!g.shape.mesh || g.shape.mesh->triangle_count() == 0)) {
+        // The geometry's warning names the link, the resource and why (not found, not a
+        // regular file, unreadable, empty, no triangles).
+        throw SceneError(scene_name(scene) + ": " +
+                         (g.warning.empty() ? "link '" + g.link + "': collision mesh '" +
+                                                  g.shape.resource + "' has no triangles"
+                                            : g.warning) +
+                         "; contact needs it (fix the path, or give the link a primitive "
+                         "<collision>)");
+      }
       CollisionObject o;
       o.name = g.name;
       o.link = g.link;

@@ -95,7 +95,7 @@ int chain_length(const std::string& spec) {
   return static_cast<int>(n);
 }
 
-se3::Model load_model(const Args& args) {
+se3::Model load_model(const Args& args, se3::UrdfDocument* doc) {
   if (args.positional.size() != 1) throw UsageError("expected one MODEL.urdf");
   const std::string& path = args.positional[0];
   const bool floating = args.has("floating");
@@ -105,7 +105,9 @@ se3::Model load_model(const Args& args) {
   } else {
     se3::UrdfOptions opt;
     opt.floating = floating;
-    m = se3::model_from_urdf_file(path, opt);
+    const se3::UrdfDocument parsed = se3::read_urdf_document(path);
+    m = se3::model_from_urdf(parsed, opt);
+    if (doc) *doc = parsed;
   }
   for (int i = 1; i <= m.n; ++i) {
     const std::string& j = m.joint_name[i];

@@ -34,7 +34,7 @@ struct Args {
 
 /// Loads a model for se3_dyn: URDF file (or chain:N), free base on request, --gravity, and the
 /// column-name rules (no ':' or ',' in joint names, none starting with "base_").
-se3::Model load_model(const Args& args);
+se3::Model load_model(const Args& args, se3::UrdfDocument* doc = nullptr);
 /// N of "chain:N" (1 <= N <= limits::kMaxBodies), else InputError.
 int chain_length(const std::string& spec);
 se3::Vec3 parse_vec3(const std::string& s, const std::string& what);

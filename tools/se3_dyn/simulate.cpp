@@ -115,10 +115,9 @@ int cmd_render(int argc, char** argv) {
       opt.markers.push_back(box);
     }
   } else {
-    model = load_model(args);
-    const std::string& path = args.positional[0];
-    geometry = path.compare(0, 6, "chain:") == 0 ? se3::chain_geometry(model)
-                                                 : se3::geometry_from_urdf_file(model, path, gopt);
+    se3::UrdfDocument doc;  // parsed once, for the model and its geometry
+    model = load_model(args, &doc);
+    geometry = doc.urdf ? se3::geometry_from_urdf(model, doc, gopt) : se3::chain_geometry(model);
   }
   for (const std::string& w : geometry.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (args.has("camera") && !se3::render::parse_camera_spec(args.get("camera"), opt, &err)) {

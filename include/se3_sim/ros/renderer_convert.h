@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <list>
 #include <map>
 #include <memory>
 #include <string>
@@ -39,18 +40,31 @@ ResourceResolver ros_resolver(const std::string& base_dir = "");
 /// The triangles of MESH_RESOURCE markers (the simulator's mesh objects), loaded once per
 /// resource and scale through the geometry layer (load_mesh_shape, its cache and limits) and
 /// made into RenderMeshes (make_render_mesh, simplified as DrawOptions say). A resource that
-/// cannot be resolved or read gives one warning and, from then on, a stand-in: a grey cube of
-/// 0.1 m times the marker's scale, so the object stays visible where it is.
+/// cannot be used gives one warning and, from then on, a stand-in: a grey cube of 0.1 m times
+/// the marker's scale, so the object stays visible where it is.
+///
+/// Any node may publish on sim_markers, so a resource is read only when, from its name alone,
+/// it is a mesh file type (is_mesh_file_type) and a package:// name stays inside its package
+/// (package_file); the mesh loader reads an OBJ's material file only beside the mesh and only
+/// regular files. Every other failure (not found, unreadable, not a mesh) gives the same
+/// words, so that the warnings on /rosout do not tell whether a file exists. The cache keeps
+/// the most recently used meshes, at most kMaxMeshes of them and kMaxBytes of triangles
+/// (least recently used evicted first; an evicted resource is read again when it is sent
+/// again, and drawn as a stand-in until then).
 class MarkerMeshes {
  public:
   explicit MarkerMeshes(ResourceResolver resolver = ros_resolver(),
                         const render::DrawOptions& opt = render::DrawOptions());
-  /// Loads m's mesh if it is a MESH_RESOURCE marker seen for the first time (allocates; call
-  /// it when the marker arrives, not per frame). Returns true and the warning in *warning the
-  /// first time a resource fails.
+  MarkerMeshes(const MarkerMeshes&) = delete;
+  MarkerMeshes& operator=(const MarkerMeshes&) = delete;
+  MarkerMeshes(MarkerMeshes&&) = default;
+  MarkerMeshes& operator=(MarkerMeshes&&) = default;
+  /// Loads m's mesh if it is a MESH_RESOURCE marker not in the cache (allocates; call it when
+  /// the marker arrives, not per frame), else marks it used. Returns true and the warning in
+  /// *warning when a resource fails.
   bool load(const visualization_msgs::Marker& m, std::string* warning = nullptr);
-  /// What to draw for m: its loaded mesh, or a stand-in (its resource failed to load, or came
-  /// past the cap), or neither (not a mesh marker, not loaded yet). One map lookup, no
+  /// What to draw for m: its loaded mesh, or a stand-in (its resource failed to load, or was
+  /// evicted), or neither (not a mesh marker, not loaded yet). One map lookup, no
   /// allocation: append_markers calls it per marker and frame.
   struct Lookup {
     std::shared_ptr<const render::RenderMesh> mesh;
@@ -64,18 +78,28 @@ class MarkerMeshes {
   /// Whether m is drawn as a stand-in (lookup(m).stand_in).
   bool failed(const visualization_msgs::Marker& m) const { return lookup(m).stand_in; }
   std::size_t size() const { return meshes_.size(); }
-  /// Distinct (resource, scale) pairs kept at most; later new ones are stand-ins, never read.
+  std::size_t bytes() const { return bytes_; }
+  /// Distinct (resource, scale) pairs kept at most (failures included).
   static constexpr std::size_t kMaxMeshes = 256;
+  /// Bytes of RenderMesh arrays kept at most.
+  static constexpr std::size_t kMaxBytes = std::size_t(256) << 20;
 
  private:
   // (resource, the scale's three doubles as bits: a total order, NaN included).
   using Key = std::tuple<std::string, std::uint64_t, std::uint64_t, std::uint64_t>;
   using KeyRef = std::tuple<const std::string&, std::uint64_t, std::uint64_t, std::uint64_t>;
   static KeyRef key(const visualization_msgs::Marker& m);
+  struct Entry {
+    std::shared_ptr<const render::RenderMesh> mesh;  ///< null: failed
+    std::size_t bytes = 0;
+    std::list<const Key*>::iterator used;  ///< its place in used_
+  };
+  void evict();
   ResourceResolver resolver_;
   render::DrawOptions opt_;
-  std::map<Key, std::shared_ptr<const render::RenderMesh>, std::less<>> meshes_;  ///< null: failed
-  bool capped_ = false;  ///< the kMaxMeshes warning was given
+  std::map<Key, Entry, std::less<>> meshes_;
+  std::list<const Key*> used_;  ///< most recently used first
+  std::size_t bytes_ = 0;
 };
 
 /// The markers the renderer draws from sim_markers, kept by (ns, id) as RViz keeps them: ADD
