@@ -34,7 +34,8 @@ def numbers(msg, kind):
 
 class SensorsTest(unittest.TestCase):
     def test_topics_frames_and_stamps(self):
-        specs = [a.split(":") for a in sys.argv[1:] if ":" in a and not a.startswith("__")]
+        specs = [a.split(":") for a in sys.argv[1:]
+                 if a.count(":") == 3 and not a.startswith(("-", "_"))]
         self.assertTrue(specs)
         lock = threading.Lock()
         got = {s[0]: [] for s in specs}
