@@ -152,6 +152,7 @@ class SensorSet {
   State x0_;
   VecX a_;
   double t0_ = 0;
+  double dt_ = 0;  ///< the step size the periods were computed for
   bool pending_ = false;
   bool contact_step_ = false;  ///< the step was a velocity step (its contact forces are new)
   std::uint64_t step0_ = 0, velocity_steps0_ = 0;

@@ -155,12 +155,15 @@ void SensorSet::before_step(const Simulator& sim) {
   pending_ = false;
   const std::uint64_t k = sim.steps();
   bool due = false;
-  for (size_t i = 0; i < sensors_.size(); ++i) {
-    const double rate = specs_[i].rate;
-    sensors_[i].period =
-        rate > 0 ? static_cast<int>(std::max(1.0, std::round(1.0 / (rate * sim.dt())))) : 1;
-    due = due || k % sensors_[i].period == 0;
+  if (sim.dt() != dt_) {  // the periods follow the step size
+    dt_ = sim.dt();
+    for (size_t i = 0; i < sensors_.size(); ++i) {
+      const double rate = specs_[i].rate;
+      sensors_[i].period =
+          rate > 0 ? static_cast<int>(std::max(1.0, std::round(1.0 / (rate * dt_)))) : 1;
+    }
   }
+  for (size_t i = 0; i < sensors_.size(); ++i) due = due || k % sensors_[i].period == 0;
   if (!due) return;
   const State& x = sim.state();
   x0_.base = x.base;
@@ -245,8 +248,11 @@ Vec6 SensorSet::external_wrench(const Simulator& sim, const Resolved& s) const {
   Vec6 W = Vec6::Zero();
   const ConstraintSystem* cs = sim.constraints();
   if (!cs || !contact_step_) return W;
-  const SE3 oMb = body_pose(*model_, data_, x0_.base, s.body);
+  SE3 oMb;
+  bool posed = false;  // the body's pose only when a force acts
   auto add = [&](const Vec3& p, const Vec3& f) {
+    if (!posed) oMb = body_pose(*model_, data_, x0_.base, s.body);
+    posed = true;
     const Vec3 fb = oMb.R.transpose() * f;
     W.head<3>() += oMb.act_inv(p).cross(fb);
     W.tail<3>() += fb;
