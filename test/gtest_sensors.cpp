@@ -365,3 +365,8 @@ TEST(Sensors, UrdfGazeboTagsAsInTheTutorials) {
   EXPECT_NE(warnings[0].find("'cam' of type 'camera'"), std::string::npos) << warnings[0];
   EXPECT_NE(warnings[1].find("libgazebo_ros_p3d.so"), std::string::npos) << warnings[1];
 }
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
