@@ -239,6 +239,18 @@ class ConstraintSystem final : public AccelerationHook {
   }
   /// Forces of the last step, one per constraint / limit / contact point (world frame).
   const std::vector<ConstraintForce>& forces() const { return forces_; }
+  /// A contact from outside (the collision layer) of the last velocity step, with the impulse
+  /// it carried: on object b, and its opposite on a (collision object indices; normal from a to
+  /// b, world, at the start-of-step configuration).
+  struct WarmExternal {
+    int a = -1, b = -1;
+    Vec3 point = Vec3::Zero(), impulse = Vec3::Zero();
+    Vec3 normal = Vec3::UnitZ();
+    double depth = 0;
+  };
+  /// The last velocity step's outside contacts: the first external_count() of external().
+  const std::vector<WarmExternal>& external() const { return warm_ext_; }
+  int external_count() const { return warm_ext_count_; }
   const ConstraintReport& report() const { return report_; }
 
  private:
@@ -346,10 +358,6 @@ class ConstraintSystem final : public AccelerationHook {
   /// step's are kept with their world impulse, and a new contact of the same object pair takes
   /// the impulse of the nearest one within 1 cm. Sized, not reserved (a copy keeps the size,
   /// not the capacity): the first warm_ext_count_ are in use; never allocates in a step.
-  struct WarmExternal {
-    int a = -1, b = -1;
-    Vec3 point = Vec3::Zero(), impulse = Vec3::Zero();
-  };
   std::vector<WarmExternal> warm_ext_, warm_ext_next_;
   int warm_ext_count_ = 0;
   std::vector<double> warm_lower_, warm_upper_, contact_gap_;

@@ -16,6 +16,7 @@
 #include "se3_sim/integrate.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/scene_objects.h"
+#include "se3_sim/sensors.h"
 
 namespace se3 {
 
@@ -49,6 +50,8 @@ struct SceneError : std::runtime_error {
 ///   objects: [{name, shape, mass, inertia, pose, twist, mu, restitution, color}, ...]
 ///       rigid bodies beside the robot (scene_objects.h); a scene may have objects and no robot
 ///   srdf: robot.srdf                self_collision: false
+///   sensors: [{name, type: imu | force_torque | contact, link | joint, pose, rate, noise,
+///       topic, frame}, ...]  (sensors.h, docs/ros.md "Sensors")
 ///   contact: {margin: 0.01, max_contacts_per_pair: 4, ground_per_body: true}
 ///       (the collision layer's options; ground_per_body: a body's shapes share one budget of
 ///       max_contacts_per_pair on the ground, CollisionOptions::ground_contacts_per_body)
@@ -92,6 +95,9 @@ struct Scene {
   double contact_margin = 0.01;   ///< `contact: {margin}` m: gaps reported as contacts
   int max_contacts_per_pair = 4;  ///< `contact: {max_contacts_per_pair}`
   bool ground_per_body = true;    ///< `contact: {ground_per_body}`: one budget a body
+  /// `sensors:` (sensors.h), in file order; the URDF's Gazebo sensor tags are not in it
+  /// (scene_sensors adds them).
+  std::vector<SensorSpec> sensors;
 };
 
 /// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.
@@ -461,6 +467,15 @@ class Simulator {
 /// frame. data holds forward_kinematics at the pose. O(depth), allocation-free.
 void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
                            const Vec6& wrench, VecX& tau);
+
+/// The scene's sensors, then those of the robot URDF's Gazebo tags (sensors_from_urdf on
+/// urdf_xml, or on the scene's robot file) whose names the scene does not use; the URDF's
+/// warnings into *warnings.
+std::vector<SensorSpec> scene_sensors(const Scene& scene, const std::string& urdf_xml,
+                                      std::vector<std::string>* warnings);
+/// The URDF text of a scene's robot: urdf_xml when not empty, else the robot file's text ("" for
+/// chain:N or no robot).
+std::string scene_urdf_text(const Scene& scene, const std::string& urdf_xml = "");
 
 /// Whether a scene's contact comes from the collision layer (scene_collision.h): it has
 /// objects, self_collision, or ground: {from_collisions: true} (the robot's own collision

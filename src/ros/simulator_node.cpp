@@ -1,8 +1,10 @@
 // The simulator node (simulator_node.h; interface in docs/ros.md).
 #include "se3_sim/ros/simulator_node.h"
 
+#include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/Imu.h>
 #include <sensor_msgs/JointState.h>
 #include <std_msgs/Float64.h>
 #include <std_msgs/Float64MultiArray.h>
@@ -27,6 +29,7 @@
 #include "se3_sim/ApplyWrench.h"
 #include "se3_sim/ChainState.h"
 #include "se3_sim/ConstraintForces.h"
+#include "se3_sim/ContactsState.h"
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/JointTrajectoryControllerState.h"
 #include "se3_sim/SetState.h"
@@ -193,6 +196,10 @@ class SimulatorNodeImpl {
   void publish_controller_states();
   /// Under mu_: sim_stats, markers, constraint forces.
   void publish_stats_and_markers(Clock::time_point now);
+  /// Under mu_: the sensors' readings that are ready (after physics_step).
+  void publish_sensors();
+  /// The sensors of the scene and the URDF's Gazebo tags, their publishers and frames.
+  void setup_sensors(const std::string& urdf_xml);
   void add_constraint_forces(const se3::ConstraintSystem& sys, const std_msgs::Header& header,
                              se3_sim::ConstraintForces& cf,
                              visualization_msgs::MarkerArray& markers) const;
@@ -253,6 +260,12 @@ class SimulatorNodeImpl {
   se3_sim::ChainState cs_;
   std::vector<geometry_msgs::TransformStamped> tfs_;
   TorqueCommand torque_;
+  // Sensors (docs/ros.md, "Sensors"): one publisher and frame_id each.
+  std::unique_ptr<se3::SensorSet> sensors_;
+  std::vector<ros::Publisher> sensor_pubs_;
+  std::vector<std::string> sensor_frames_;
+  std::vector<geometry_msgs::TransformStamped> sensor_tfs_;  ///< link -> sensor frame (static)
+  std::string urdf_xml_;
 };
 
 // ------------------------------------------------------------------ setup
@@ -339,6 +352,7 @@ void SimulatorNodeImpl::configure() {
   lockstep_steps_ = static_cast<int>(std::max(1.0, std::min(1e6, std::round(period / scene_.dt))));
 
   sim_ = se3::make_simulator(scene_, urdf_xml);
+  urdf_xml_ = urdf_xml;
   sim_->set_command_timeout(command_timeout_);
   model_ = &sim_->model();
   const se3::Model& m = *model_;
@@ -477,10 +491,20 @@ bool SimulatorNodeImpl::init() {
   marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("sim_markers", 10);
   constraint_pub_ = nh_.advertise<se3_sim::ConstraintForces>("constraint_forces", 10);
   if (use_sim_time_) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
+  try {
+    setup_sensors(urdf_xml_);
+  } catch (const std::exception& e) {
+    ROS_FATAL("simulator: %s", e.what());
+    return false;
+  }
   tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   tf_static_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-  const std::vector<geometry_msgs::TransformStamped> fixed =
+  std::vector<geometry_msgs::TransformStamped> fixed =
       tf_static_transforms(*model_, tree_, ros::Time::now());
+  for (geometry_msgs::TransformStamped t : sensor_tfs_) {
+    t.header.stamp = ros::Time::now();
+    fixed.push_back(t);
+  }
   if (!fixed.empty()) tf_static_->sendTransform(fixed);
 
   // Queues of 1000: a 10 kHz stream is held for 0.1 s; whatever is lost anyway is counted from
@@ -602,8 +626,11 @@ void SimulatorNodeImpl::run() {
 // Under mu_. One physics step with timing; the guard pauses the simulator.
 bool SimulatorNodeImpl::physics_step() {
   const Clock::time_point t0 = Clock::now();
+  if (sensors_) sensors_->before_step(*sim_);
   const bool ok = sim_->step();
+  if (sensors_) sensors_->after_step(*sim_, ok);
   step_wall_ += Clock::now() - t0;
+  if (sensors_) publish_sensors();
   ++period_steps_;
   if (ok) {
     ++anchored_;
@@ -760,6 +787,7 @@ bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger:
   std::lock_guard<TurnMutex> lock(mu_);
   if (request_.active) end_step_request(false, "interrupted by simulator/reset");
   sim_->reset();
+  if (sensors_) sensors_->reset();
   status_.clear();
   anchor_ = Clock::now();
   anchored_ = 0;
@@ -944,6 +972,135 @@ bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
 }
 
 // ------------------------------------------------------------------ publishing
+
+void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
+  std::vector<std::string> warnings;
+  const std::vector<se3::SensorSpec> specs = se3::scene_sensors(scene_, urdf_xml, &warnings);
+  for (const std::string& w : warnings) ROS_WARN("simulator: %s", w.c_str());
+  if (specs.empty()) return;
+  sensors_ =
+      std::make_unique<se3::SensorSet>(*model_, specs, se3::scene_urdf_text(scene_, urdf_xml));
+  const se3::Model& m = *model_;
+  for (const se3::SensorSpec& s : specs) {
+    const std::string topic = s.topic.empty() ? s.name : s.topic;
+    // The frame: the sensor's `frame`, else its link (force-torque: the joint's child link)
+    // when it sits at the link's origin, else a frame of its own name on /tf_static.
+    std::string link = s.link;
+    if (s.type == se3::SensorType::ForceTorque) {
+      for (const se3::LinkFrame& l : m.links) {
+        if (l.joint == s.joint) link = l.name;
+      }
+    }
+    link = se3::frame_name(link);
+    std::string frame = s.frame;
+    const bool at_link = s.pose.isApprox(se3::SE3(), 1e-12);
+    if (s.type == se3::SensorType::Contact) {
+      if (frame.empty()) frame = world_frame_;
+    } else if (frame.empty()) {
+      frame = at_link ? link : s.name;
+    }
+    if (s.type != se3::SensorType::Contact && frame != link && s.frame.empty()) {
+      geometry_msgs::TransformStamped t;
+      t.header.frame_id = link;
+      t.child_frame_id = frame;
+      t.transform.translation.x = s.pose.p.x();
+      t.transform.translation.y = s.pose.p.y();
+      t.transform.translation.z = s.pose.p.z();
+      const Eigen::Quaterniond q(s.pose.R);
+      t.transform.rotation.x = q.x();
+      t.transform.rotation.y = q.y();
+      t.transform.rotation.z = q.z();
+      t.transform.rotation.w = q.w();
+      sensor_tfs_.push_back(t);
+    }
+    sensor_frames_.push_back(frame);
+    const char* type = "";
+    if (s.type == se3::SensorType::Imu) {
+      sensor_pubs_.push_back(nh_.advertise<sensor_msgs::Imu>(topic, 100));
+      type = "imu (sensor_msgs/Imu)";
+    } else if (s.type == se3::SensorType::ForceTorque) {
+      sensor_pubs_.push_back(nh_.advertise<geometry_msgs::WrenchStamped>(topic, 100));
+      type = "force_torque (geometry_msgs/WrenchStamped)";
+    } else {
+      sensor_pubs_.push_back(nh_.advertise<se3_sim::ContactsState>(topic, 100));
+      type = "contact (se3_sim/ContactsState)";
+    }
+    ROS_INFO("simulator: sensor %s, %s on %s in frame %s at %g Hz", s.name.c_str(), type,
+             sensor_pubs_.back().getTopic().c_str(), frame.c_str(), s.rate);
+  }
+}
+
+// Under mu_. Every reading is stamped with the simulated time of the state it shows (with
+// use_sim_time; else the wall clock, as the node's other stamps).
+void SimulatorNodeImpl::publish_sensors() {
+  for (int i = 0; i < sensors_->size(); ++i) {
+    const se3::SensorReading& r = sensors_->reading(i);
+    if (!r.ready) continue;
+    sensors_->take(i);
+    std_msgs::Header h;
+    h.stamp = use_sim_time_ ? ros::Time(r.stamp) : ros::Time::now();
+    h.frame_id = sensor_frames_[i];
+    const se3::SensorSpec& s = sensors_->specs()[i];
+    const double var = s.noise.stddev * s.noise.stddev;
+    if (s.type == se3::SensorType::Imu) {
+      sensor_msgs::Imu msg;
+      msg.header = h;
+      msg.orientation.x = r.orientation.x();
+      msg.orientation.y = r.orientation.y();
+      msg.orientation.z = r.orientation.z();
+      msg.orientation.w = r.orientation.w();
+      msg.angular_velocity.x = r.angular_velocity.x();
+      msg.angular_velocity.y = r.angular_velocity.y();
+      msg.angular_velocity.z = r.angular_velocity.z();
+      msg.linear_acceleration.x = r.linear_acceleration.x();
+      msg.linear_acceleration.y = r.linear_acceleration.y();
+      msg.linear_acceleration.z = r.linear_acceleration.z();
+      for (int k = 0; k < 3; ++k) {
+        msg.orientation_covariance[4 * k] = 0;  // exact
+        msg.angular_velocity_covariance[4 * k] = var;
+        msg.linear_acceleration_covariance[4 * k] = var;
+      }
+      sensor_pubs_[i].publish(msg);
+    } else if (s.type == se3::SensorType::ForceTorque) {
+      geometry_msgs::WrenchStamped msg;
+      msg.header = h;
+      msg.wrench.force.x = r.force.x();
+      msg.wrench.force.y = r.force.y();
+      msg.wrench.force.z = r.force.z();
+      msg.wrench.torque.x = r.torque.x();
+      msg.wrench.torque.y = r.torque.y();
+      msg.wrench.torque.z = r.torque.z();
+      sensor_pubs_[i].publish(msg);
+    } else {
+      se3_sim::ContactsState msg;
+      msg.header = h;
+      msg.header.frame_id = world_frame_;
+      msg.states.resize(r.count);
+      auto vec = [](const se3::Vec3& v) {
+        geometry_msgs::Vector3 o;
+        o.x = v.x();
+        o.y = v.y();
+        o.z = v.z();
+        return o;
+      };
+      for (int k = 0; k < r.count; ++k) {
+        const se3::SensorReading::Touch& t = r.touches[k];
+        se3_sim::ContactState& c = msg.states[k];
+        c.info = "depth " + std::to_string(t.depth) + " m";
+        c.collision1_name = t.self;
+        c.collision2_name = t.other;
+        geometry_msgs::Wrench w;
+        w.force = vec(t.force);
+        c.wrenches.push_back(w);
+        c.total_wrench = w;
+        c.contact_positions.push_back(vec(t.position));
+        c.contact_normals.push_back(vec(t.normal));
+        c.depths.push_back(t.depth);
+      }
+      sensor_pubs_[i].publish(msg);
+    }
+  }
+}
 
 ros::Time SimulatorNodeImpl::stamp() const {
   return use_sim_time_ ? ros::Time(sim_->time()) : ros::Time::now();

@@ -244,11 +244,16 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
   for (const auto& k : constraint_scene_keys()) known.push_back(k);  // constraints.h
   known.push_back("objects");                                        // these two need base_dir
   known.push_back("srdf");
+  known.push_back("sensors");
   Scene s;
   s.file = file_for_messages;
   for (const Field& f : r.fields(root, known)) {
     if (f.name == "objects") {
       read_scene_objects(r, f, base_dir, s.objects);
+      continue;
+    }
+    if (f.name == "sensors") {
+      read_scene_sensors(r, f, s.sensors);
       continue;
     }
     if (f.name == "srdf") {
@@ -443,6 +448,35 @@ std::string model_to_urdf(const Model& model, const GeometryModel* geometry) {
   }
   o << "</robot>\n";
   return o.str();
+}
+
+std::string scene_urdf_text(const Scene& scene, const std::string& urdf_xml) {
+  if (!urdf_xml.empty()) return urdf_xml;
+  if (scene.robot_path.empty() || scene.robot_path.compare(0, 6, "chain:") == 0) return "";
+  std::ifstream in(scene.robot_path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<SensorSpec> scene_sensors(const Scene& scene, const std::string& urdf_xml,
+                                      std::vector<std::string>* warnings) {
+  std::vector<SensorSpec> out = scene.sensors;
+  const std::string xml = scene_urdf_text(scene, urdf_xml);
+  if (xml.empty()) return out;
+  for (SensorSpec& s : sensors_from_urdf(xml, warnings)) {
+    bool taken = false;
+    for (const SensorSpec& t : out) taken = taken || t.name == s.name;
+    if (taken) {
+      if (warnings) {
+        warnings->push_back(s.where + ": sensor '" + s.name +
+                            "' is also in the scene; the scene's is used");
+      }
+      continue;
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
 }
 
 }  // namespace se3

@@ -105,4 +105,8 @@ class SceneReader {
   std::string file_;
 };
 
+/// The `sensors:` list (sensors.h): every key checked, one line naming the file, line and key.
+void read_scene_sensors(const SceneReader& r, const SceneReader::Field& v,
+                        std::vector<SensorSpec>& out);
+
 }  // namespace se3

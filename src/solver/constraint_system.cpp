@@ -893,6 +893,8 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     w.a = ct.a;
     w.b = ct.b;
     w.point = ct.point;
+    w.normal = ct.normal;
+    w.depth = ct.depth;
     w.impulse = p_[r] * ct.normal + p_[rows_.friction[r]] * t1 + p_[rows_.friction2[r]] * t2;
   }
   warm_ext_.swap(warm_ext_next_);

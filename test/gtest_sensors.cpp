@@ -1,0 +1,372 @@
+// Sensors (sensors.h): an IMU resting on the ground reads +g upward, a spinning free body's IMU
+// its body rate and zero acceleration at its centre, a wrist force-torque sensor on a fixed
+// joint the weight and moment of what hangs below it, a contact sensor the push's contacts;
+// the scene's `sensors:` keys and a URDF's Gazebo tags; seeded noise.
+#include <gtest/gtest.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "se3_sim/sensors.h"
+#include "se3_sim/sim.h"
+
+using namespace se3;
+
+namespace {
+
+const std::string kScenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+const std::string kRobots = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/";
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string scene_text(const std::string& name) {
+  return file_text(kScenes + name + ".yaml");
+}
+
+// Steps sim with the sensors for `seconds`.
+void run(Simulator& sim, SensorSet& sensors, double seconds) {
+  const int steps = static_cast<int>(std::lround(seconds / sim.dt()));
+  for (int k = 0; k < steps; ++k) {
+    sensors.before_step(sim);
+    const bool ok = sim.step();
+    sensors.after_step(sim, ok);
+    ASSERT_TRUE(ok) << sim.failure();
+  }
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_scene(text, kScenes, "s.yaml");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Sensors, ImuOnRobotRestingOnGroundReadsPlusG) {
+  const Scene scene = parse_scene(
+      scene_text("quadruped_ground") + "sensors:\n  - {name: imu, type: imu, link: base_link}\n",
+      kScenes, "quadruped_ground.yaml");
+  auto sim = make_simulator(scene);
+  SensorSet sensors(sim->model(), scene.sensors);
+  run(*sim, sensors, 3.0);
+  const SensorReading& r = sensors.reading(0);
+  ASSERT_TRUE(r.ready);
+  EXPECT_NEAR(r.stamp, sim->time() - sim->dt(), 1e-12);
+  // In a level frame (the reading rotated by its own orientation): (0, 0, +9.81).
+  const Vec3 level = r.orientation * r.linear_acceleration;
+  EXPECT_NEAR(level.x(), 0, 1e-3);
+  EXPECT_NEAR(level.y(), 0, 1e-3);
+  EXPECT_NEAR(level.z(), 9.81, 1e-3);
+  EXPECT_LT(r.angular_velocity.norm(), 1e-3);
+  const Eigen::Quaterniond q(sim->state().base.R);
+  EXPECT_LT(q.angularDistance(r.orientation), 1e-3);
+}
+
+TEST(Sensors, ImuOnSpinningFreeBodyReadsBodyRateAndZeroAtCentre) {
+  const std::string urdf =
+      "<robot name='b'><link name='body'><inertial><origin xyz='0 0 0'/><mass value='2'/>"
+      "<inertia ixx='0.1' iyy='0.2' izz='0.3' ixy='0' ixz='0' iyz='0'/></inertial></link>"
+      "</robot>";
+  const Scene scene = parse_scene(
+      "base: free\ngravity: [0, 0, 0]\nintegrator: rkmk4\ndt: 0.001\n"
+      "base_twist: [1.0, 2.0, 3.0, 0.0, 0.0, 0.0]\n"
+      "sensors:\n  - {name: centre, type: imu, link: body}\n"
+      "  - {name: off, type: imu, link: body, pose: {position: [0.1, 0.0, 0.0]}}\n",
+      kScenes, "spin.yaml");
+  auto sim = make_simulator(scene, urdf);
+  SensorSet sensors(sim->model(), scene.sensors, urdf);
+  for (int k = 0; k < 200; ++k) {
+    const Vec6 V = sim->state().v.head<6>();
+    sensors.before_step(*sim);
+    ASSERT_TRUE(sim->step());
+    sensors.after_step(*sim);
+    const SensorReading& c = sensors.reading(0);
+    ASSERT_TRUE(c.ready);
+    EXPECT_LT((c.angular_velocity - V.head<3>()).norm(), 1e-12);
+    EXPECT_LT(c.linear_acceleration.norm(), 1e-9);
+    // Off the centre: the point's acceleration, w x (w x r) + alpha x r, alpha from Euler's
+    // equations I alpha = -w x I w (the step's mean, within O(dt) of it).
+    const Vec3 w = V.head<3>(), r(0.1, 0, 0);
+    const Vec3 I(0.1, 0.2, 0.3);
+    const Vec3 alpha = -(w.cross(I.cwiseProduct(w))).cwiseQuotient(I);
+    const Vec3 expect = w.cross(w.cross(r)) + alpha.cross(r);
+    EXPECT_LT((sensors.reading(1).linear_acceleration - expect).norm(), 0.05 * expect.norm());
+  }
+}
+
+namespace {
+
+// The fixed Panda held still by a position controller on every arm joint.
+Scene resting_panda(const std::string& sensors) {
+  return parse_scene(
+      scene_text("fixed_panda") +
+          "controllers:\n  arm:\n    type: effort_controllers/JointGroupPositionController\n"
+          "    joints: [panda_joint1, panda_joint2, panda_joint3, panda_joint4, panda_joint5,"
+          " panda_joint6, panda_joint7]\n    pid: {p: 2000.0, i: 0.0, d: 100.0}\n"
+          "    gains: {panda_joint5: {p: 100.0, d: 4.0}, panda_joint6: {p: 100.0, d: 4.0},"
+          " panda_joint7: {p: 50.0, d: 1.0}}\n" +
+          sensors,
+      kScenes, "fixed_panda.yaml");
+}
+
+// What hangs below link `top` (its URDF subtree): mass and centre of mass in the world.
+void hanging(const Simulator& sim_c, const std::string& top, double* mass, Vec3* com) {
+  Simulator& sim = const_cast<Simulator&>(sim_c);
+  const Model& m = sim.model();
+  static const auto urdf = urdf::parseURDF(file_text(kRobots + "panda.urdf"));
+  std::vector<SE3> poses;
+  sim.link_poses(poses);
+  const int top_i = m.link_index(top);
+  *mass = 0;
+  Vec3 h = Vec3::Zero();
+  for (size_t l = 0; l < m.links.size(); ++l) {
+    bool in = false;
+    for (int k = static_cast<int>(l); k >= 0; k = m.links[k].parent) in = in || k == top_i;
+    if (!in) continue;
+    auto link = urdf->getLink(m.links[l].name);
+    if (!link->inertial) continue;
+    const auto& p = link->inertial->origin.position;
+    *mass += link->inertial->mass;
+    h += link->inertial->mass * poses[l].act(Vec3(p.x, p.y, p.z));
+  }
+  *com = h / *mass;
+}
+
+}  // namespace
+
+TEST(Sensors, ForceTorqueOnFixedWristJointReadsWhatHangsBelow) {
+  const Scene scene = resting_panda(
+      "sensors:\n  - {name: wrist, type: force_torque, joint: panda_hand_joint}\n"
+      "  - {name: flange, type: force_torque, joint: panda_joint8, rate: 100}\n"
+      "  - {name: j7, type: force_torque, joint: panda_joint7}\n");
+  auto sim = make_simulator(scene);
+  SensorSet sensors(sim->model(), scene.sensors, file_text(kRobots + "panda.urdf"));
+  run(*sim, sensors, 2.0);
+  EXPECT_LT(sim->state().v.norm(), 1e-6);
+  std::vector<SE3> poses;
+  sim->link_poses(poses);
+  const char* child[] = {"panda_hand", "panda_link8", "panda_link7"};
+  for (int i = 0; i < 3; ++i) {
+    SCOPED_TRACE(child[i]);
+    double mass = 0;
+    Vec3 com;
+    hanging(*sim, child[i], &mass, &com);
+    const SE3& S = poses[sim->model().link_index(child[i])];
+    // Child on parent: the weight, and its moment about the sensor's origin.
+    const Vec3 weight = mass * Vec3(0, 0, -9.81);
+    const Vec3 f = S.R.transpose() * weight;
+    const Vec3 t = S.R.transpose() * (com - S.p).cross(weight);
+    const SensorReading& r = sensors.reading(i);
+    ASSERT_TRUE(r.ready);
+    EXPECT_LT((r.force - f).norm(), 1e-6 * weight.norm()) << r.force.transpose();
+    EXPECT_LT((r.torque - t).norm(), 1e-6 * weight.norm()) << r.torque.transpose();
+  }
+  EXPECT_EQ(sensors.period(1), 10);
+}
+
+TEST(Sensors, ForceTorqueDuringPushMatchesContactForce) {
+  // The shipped scene's sensors sample at 100 Hz: these sample every step.
+  std::string text = scene_text("panda_push");
+  text = text.substr(0, text.find("\nsensors:") + 1);
+  const Scene scene =
+      parse_scene(text +
+                      "sensors:\n  - {name: wrist, type: force_torque, joint: panda_hand_joint}\n"
+                      "  - {name: left, type: contact, link: panda_leftfinger}\n"
+                      "  - {name: right, type: contact, link: panda_rightfinger}\n"
+                      "  - {name: hand, type: contact, link: panda_hand}\n",
+                  kScenes, "panda_push.yaml");
+  auto sim = make_simulator(scene);
+  SensorSet sensors(sim->model(), scene.sensors, file_text(kRobots + "panda.urdf"));
+  double mass = 0;
+  Vec3 com;
+  hanging(*sim, "panda_hand", &mass, &com);
+  // Per step k: the centre of mass of what hangs below the wrist (before the step), the
+  // reading's force in the world and the contact sensors' total.
+  const int steps = 1500;
+  std::vector<Vec3> c(steps + 1), measured(steps), contact(steps, Vec3::Zero());
+  std::vector<SE3> poses;
+  for (int k = 0; k <= steps; ++k) {
+    double m = 0;
+    hanging(*sim, "panda_hand", &m, &c[k]);
+    if (k == steps) break;
+    sim->link_poses(poses);
+    const SE3 S = poses[sim->model().link_index("panda_hand")];
+    sensors.before_step(*sim);
+    ASSERT_TRUE(sim->step());
+    sensors.after_step(*sim);
+    ASSERT_NEAR(sensors.reading(0).stamp, k * sim->dt(), 1e-12);
+    measured[k] = S.R * sensors.reading(0).force;
+    for (int i = 1; i <= 3; ++i) contact[k] += sensors.reading(i).total_force;
+  }
+  // Child on parent = -(m (a - g) - F_contact), a the centre of mass's acceleration: here the
+  // second difference of its positions, the scheme's (v_{k+1} - v_k) / dt to O(dt).
+  int touching = 0;
+  double worst = 0, largest = 0;
+  const double dt = sim->dt();
+  for (int k = 1; k + 1 < steps; ++k) {
+    if (contact[k].norm() < 1.0) continue;
+    ++touching;
+    const Vec3 a = (c[k + 1] - 2 * c[k] + c[k - 1]) / (dt * dt);
+    const Vec3 expect = contact[k] - mass * (a - Vec3(0, 0, -9.81));
+    worst = std::max(worst, (measured[k] - expect).norm() / (1 + contact[k].norm()));
+    largest = std::max(largest, contact[k].norm());
+  }
+  EXPECT_GT(touching, 300);
+  EXPECT_GT(largest, 5.0);
+  EXPECT_LT(worst, 0.02);
+}
+
+TEST(Sensors, NoiseIsSeededByNameAndOffByDefault) {
+  const std::string base =
+      "sensors:\n  - {name: quiet, type: force_torque, joint: panda_joint7}\n"
+      "  - {name: noisy, type: force_torque, joint: panda_joint7, noise: {stddev: 0.5}}\n"
+      "  - {name: other, type: force_torque, joint: panda_joint7, noise: {stddev: 0.5}}\n";
+  const Scene scene = resting_panda(base);
+  std::vector<Vec3> first;
+  for (int run_i = 0; run_i < 2; ++run_i) {
+    auto sim = make_simulator(scene);
+    SensorSet sensors(sim->model(), scene.sensors);
+    for (int k = 0; k < 20; ++k) {
+      sensors.before_step(*sim);
+      ASSERT_TRUE(sim->step());
+      sensors.after_step(*sim);
+      const Vec3 q = sensors.reading(0).force, n = sensors.reading(1).force,
+                 o = sensors.reading(2).force;
+      EXPECT_GT((n - q).norm(), 1e-3);
+      EXPECT_GT((o - n).norm(), 1e-3);  // another name, another stream
+      if (run_i == 0) {
+        first.push_back(n);
+      } else {
+        EXPECT_EQ(first[k], n);  // the same bits run after run
+      }
+    }
+  }
+  EXPECT_NE(SensorSet::seed_of("noisy"), SensorSet::seed_of("other"));
+  EXPECT_EQ(SensorSet::seed_of(""), 14695981039346656037ull);
+}
+
+TEST(Sensors, SceneKeysAreChecked) {
+  EXPECT_EQ(error_of("sensors:\n  - {name: a, type: imu, lnk: x}\n").rfind("s.yaml:2:", 0), 0u)
+      << error_of("sensors:\n  - {name: a, type: imu, lnk: x}\n");
+  EXPECT_NE(error_of("sensors:\n  - {name: a, type: imu, lnk: x}\n").find("lnk"),
+            std::string::npos);
+  const std::string cam = error_of("sensors:\n  - {name: c, type: camera, link: x}\n");
+  EXPECT_NE(cam.find("'camera' is not supported yet"), std::string::npos) << cam;
+  EXPECT_NE(error_of("sensors:\n  - {name: f, type: force_torque, link: x}\n").find("joint"),
+            std::string::npos);
+  EXPECT_NE(error_of("sensors:\n  - {name: i, type: imu}\n").find("needs link"), std::string::npos);
+  EXPECT_NE(error_of("sensors:\n  - {name: i, type: imu, link: a, rate: -1}\n").find("rate"),
+            std::string::npos);
+  EXPECT_NE(error_of("sensors:\n  - {name: i, type: imu, link: a}\n"
+                     "  - {name: i, type: imu, link: b}\n")
+                .find("named twice"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("sensors:\n  - {name: i, type: imu, link: a, noise: {stdev: 1}}\n").find("stdev"),
+      std::string::npos);
+  const Scene s = parse_scene(
+      "sensors:\n  - name: i\n    type: imu\n    link: a\n    rate: 200\n    topic: /imu/data\n"
+      "    pose: {position: [0, 0, 0.1], orientation: [0, 0, 0, 1]}\n"
+      "    noise: {mean: 0.1, stddev: 0.2, bias: 0.3}\n",
+      kScenes, "s.yaml");
+  ASSERT_EQ(s.sensors.size(), 1u);
+  EXPECT_EQ(s.sensors[0].topic, "/imu/data");
+  EXPECT_EQ(s.sensors[0].rate, 200);
+  EXPECT_EQ(s.sensors[0].noise.bias, 0.3);
+  EXPECT_EQ(s.sensors[0].pose.p, Vec3(0, 0, 0.1));
+  // A link the robot lacks: the sensor's name and line.
+  const Scene bad = resting_panda("sensors:\n  - {name: nowhere, type: imu, link: no_link}\n");
+  auto sim = make_simulator(bad);
+  try {
+    SensorSet set(sim->model(), bad.sensors);
+    FAIL();
+  } catch (const SensorError& e) {
+    EXPECT_NE(std::string(e.what()).find("sensor 'nowhere' (fixed_panda.yaml:"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Sensors, UrdfGazeboTagsAsInTheTutorials) {
+  const std::string urdf = R"(<robot name="r">
+  <link name="base"/><link name="tool"/>
+  <joint name="wrist_ft" type="fixed"><parent link="base"/><child link="tool"/></joint>
+  <gazebo reference="base">
+    <gravity>true</gravity>
+    <sensor name="imu_sensor" type="imu">
+      <always_on>true</always_on>
+      <update_rate>100</update_rate>
+      <visualize>true</visualize>
+      <topic>__default_topic__</topic>
+      <plugin filename="libgazebo_ros_imu_sensor.so" name="imu_plugin">
+        <topicName>imu</topicName>
+        <bodyName>base</bodyName>
+        <updateRateHZ>100.0</updateRateHZ>
+        <gaussianNoise>0.01</gaussianNoise>
+        <xyzOffset>0 0 0</xyzOffset>
+        <rpyOffset>0 0 0</rpyOffset>
+        <frameName>base</frameName>
+      </plugin>
+      <pose>0 0 0.1 0 0 0</pose>
+    </sensor>
+    <sensor name="cam" type="camera"/>
+  </gazebo>
+  <gazebo reference="tool">
+    <sensor name="tool_contact" type="contact">
+      <update_rate>50</update_rate>
+      <contact><collision>tool_collision</collision></contact>
+      <plugin name="bumper" filename="libgazebo_ros_bumper.so">
+        <bumperTopicName>tool_bumper</bumperTopicName>
+        <frameName>world</frameName>
+      </plugin>
+    </sensor>
+  </gazebo>
+  <gazebo>
+    <plugin name="ft_sensor" filename="libgazebo_ros_ft_sensor.so">
+      <updateRate>100.0</updateRate>
+      <topicName>ft_sensor_topic</topicName>
+      <jointName>wrist_ft</jointName>
+    </plugin>
+    <plugin name="p3d" filename="libgazebo_ros_p3d.so"/>
+  </gazebo>
+</robot>)";
+  std::vector<std::string> warnings;
+  const auto s = sensors_from_urdf(urdf, &warnings);
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_EQ(s[0].type, SensorType::Imu);
+  EXPECT_EQ(s[0].name, "imu_sensor");
+  EXPECT_EQ(s[0].link, "base");
+  EXPECT_EQ(s[0].topic, "imu");
+  EXPECT_EQ(s[0].frame, "base");
+  EXPECT_EQ(s[0].rate, 100);
+  EXPECT_EQ(s[0].noise.stddev, 0.01);
+  EXPECT_EQ(s[0].pose.p, Vec3(0, 0, 0.1));
+  EXPECT_EQ(s[1].type, SensorType::Contact);
+  EXPECT_EQ(s[1].link, "tool");
+  EXPECT_EQ(s[1].topic, "tool_bumper");
+  EXPECT_EQ(s[1].frame, "world");
+  EXPECT_EQ(s[1].rate, 50);
+  EXPECT_EQ(s[2].type, SensorType::ForceTorque);
+  EXPECT_EQ(s[2].joint, "wrist_ft");
+  EXPECT_EQ(s[2].topic, "ft_sensor_topic");
+  EXPECT_EQ(s[2].rate, 100);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_NE(warnings[0].find("'cam' of type 'camera'"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[1].find("libgazebo_ros_p3d.so"), std::string::npos) << warnings[1];
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
