@@ -740,7 +740,7 @@ void SimulatorNodeImpl::on_trajectory(int c,
     out.velocities = in.velocities;
     out.accelerations = in.accelerations;
   }
-  std::unique_lock<std::mutex> lock(mu_);
+  std::unique_lock<TurnMutex> lock(mu_);
   const double now = sim_->time();
   if (!msg->header.stamp.isZero()) {
     cmd.start = use_sim_time_ ? msg->header.stamp.toSec()
