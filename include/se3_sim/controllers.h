@@ -159,6 +159,14 @@ bool single_joint(ControllerKind kind);
 /// True for position and velocity kinds (they need gains).
 bool uses_pid(ControllerKind kind);
 
+/// Whether name can name a controller: its topic NAME/command and parameters NAME/... are ROS
+/// names relative to the controllers' namespace (ros::names::validate's rules, without the
+/// leading '/' or '~' that would move them out of it): an ASCII letter, then letters, digits,
+/// '_' or '/' (no "//", no '/' at the end).
+bool is_controller_name(const std::string& name);
+/// "" for a good controller name, else why not (one phrase, the name quoted at most 60 bytes).
+std::string controller_name_problem(const std::string& name);
+
 /// One controller from its YAML map (NAME: {type: ..., ...}). Throws ControllerError naming
 /// `where` (a file or "scene x.yaml"), the controller and the key.
 ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,

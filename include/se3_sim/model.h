@@ -160,6 +160,9 @@ struct Model {
   /// Index into links of a link by name (a leading '/' ignored), or -1.
   int link_index(const std::string& link) const;
   double total_mass() const;
+  /// Whether body i's joint is continuous: revolute without a finite lower and upper limit, so
+  /// that its configuration space is the circle and q and q + 2 pi are the same configuration.
+  bool continuous(int i) const;
   /// Checks sizes and numbers; throws ModelError naming the culprit.
   void validate() const;
   /// Fills joints[0] (from floating), every joint's idx_q, idx_v, z_rotation and offset_axes, nq,
@@ -172,6 +175,15 @@ struct Model {
   int add_body(int parent, JointType type, const SE3& X_tree, const Inertia& inertia,
                const std::string& body, const std::string& joint);
 };
+
+/// The angle q as the same point of the circle in (-pi, pi] (q finite; NaN and inf pass as they
+/// are, for the callers' own checks).
+double wrap_angle(double q);
+/// Wraps every continuous joint's coordinate of q (Model::continuous) into (-pi, pi], as the
+/// joint's configuration space says (q of an angle 1e15 rad kept as it is would lose every
+/// digit of the step's increments); joints with limits and prismatic joints are left as they
+/// are. Returns how many coordinates changed.
+int wrap_continuous_joints(const Model& model, Eigen::VectorXd& q);
 
 /// The frame name of a URDF link: a leading '/' (ROS 1 URDFs from before tf2) stripped, as
 /// tf2 and robot_state_publisher do. Model names (links, body_name, root_link) are frame names.

@@ -112,7 +112,7 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
 /// (no robot at all; a locked joint the robot lacks, naming the scene).
 Model scene_model(const Scene& scene, const std::string& urdf_xml = "");
 /// The scene's initial state for model (a joint the model does not move is a SceneError naming
-/// the scene and the joint).
+/// the scene and the joint); continuous joints' angles wrapped into (-pi, pi].
 State scene_state(const Scene& scene, const Model& model);
 /// A random state: joints uniform within their limits ([-pi, pi] when unlimited), joint rates
 /// and base twist uniform in [-1, 1], base at the identity. Fixed by seed.
@@ -321,9 +321,12 @@ class Simulator {
   const std::string& failure() const { return failure_; }
   /// Back to the initial state, commands cleared, failure cleared, time 0.
   void reset();
+  /// The state reset() goes back to; continuous joints' angles wrapped into (-pi, pi]
+  /// (wrap_continuous_joints).
   void set_initial_state(const State& s);
-  /// Replaces the current state. Throws std::invalid_argument (state unchanged) when the sizes do
-  /// not match or the state is not finite (State::finite).
+  /// Replaces the current state, continuous joints' angles wrapped into (-pi, pi]. Throws
+  /// std::invalid_argument (state unchanged) when the sizes do not match or the state is not
+  /// finite (State::finite).
   void set_state(const State& s);
   /// Changes the integrator or step size (state kept).
   void set_integrator(const std::string& name);
@@ -375,6 +378,8 @@ class Simulator {
   void refresh_reference();
   /// The guard's checks (cheap; the reason is found again only after a failure).
   bool rates_ok() const;
+  /// The first free object (index into bodies_) the rate guard refuses, or -1.
+  int first_bad_object() const;
   bool energy_ok();
   void roll_back(const StepInfo& info);
   /// The generalized force of the next step: expires stale commands, runs the controllers,
@@ -495,13 +500,15 @@ struct SimulateOptions {
   std::string scene;            ///< SCENE.yaml: robot, base, initial state, gravity, integrator, dt
   std::string integrator;       ///< "" = the scene's, else rkmk4
   double dt = 0;                ///< 0 = the scene's, else 0.001
-  double duration = 1.0;        ///< simulated seconds
+  double duration = 1.0;        ///< simulated seconds; round(duration / dt) >= 1
   double tol = 0;               ///< rkmk45 tolerance; 0 = the scene's, else 1e-6
   unsigned seed = 1;            ///< random initial state (model runs, or random_initial)
   bool random_initial = false;  ///< with a scene: random state instead of the scene's
   bool has_gravity = false;     ///< override gravity with `gravity`
   Vec3 gravity = Vec3(0, 0, -9.81);
-  std::string out_csv;  ///< trajectory file ("" = none): t, base pose and twist, q:, v:, E
+  /// Trajectory file ("" = none): t, base pose and twist, q:, v:, energies, then every free
+  /// object's pose and twist (obj:NAME:x ... obj:NAME:vz; docs/design.md).
+  std::string out_csv;
   /// Most body-steps (steps x bodies; an adaptive stepper's internal steps count) of the run.
   double max_body_steps = limits::kMaxBodySteps;
 };

@@ -74,6 +74,12 @@ namespace {
 // The dense products, for every row's columns.
 void dense_delassus(const ConstraintRows::RowMat& J, int rows, int nv, const MatX& Minv, MatX& Y,
                     MatX& W) {
+  if (nv == 0) {
+    // No robot dofs (a scene of objects alone): the block is zero. Eigen's triangular product
+    // divides by its inner dimension when it sizes its blocks, and 0 is SIGFPE.
+    W.topLeftCorner(rows, rows).triangularView<Eigen::Lower>().setZero();
+    return;
+  }
   auto Jr = J.topLeftCorner(rows, nv);
   Y.topLeftCorner(nv, rows).noalias() = Minv * Jr.transpose();
   W.topLeftCorner(rows, rows).triangularView<Eigen::Lower>() = Jr * Y.topLeftCorner(nv, rows);

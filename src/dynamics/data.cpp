@@ -1,3 +1,4 @@
+#include "dynamics/tree_depth.h"
 #include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
@@ -51,12 +52,11 @@ Data::Data(const Model& model) {
   }
   // D^-1 by factorizing D: its cost, sum over dofs k of depth_k k (the row recurrence), against
   // the recursion's subtree column loops and per-body world inertias.
+  std::vector<int> depth(nv);
+  detail::dof_depths(
+      model.nv, [this](int k) { return v_parent[k]; }, depth.data());
   long factor_work = 0;
-  for (int k = 0; k < model.nv; ++k) {
-    int depth = 0;
-    for (int i = v_parent[k]; i >= 0; i = v_parent[i]) ++depth;
-    factor_work += static_cast<long>(depth) * k;
-  }
+  for (int k = 0; k < model.nv; ++k) factor_work += static_cast<long>(depth[k]) * k;
   minv_by_factor =
       factor_work <= (model.floating ? kMinvFactorWorkPerDofFree : kMinvFactorWorkPerDof) *
                          static_cast<long>(model.nv);

@@ -131,6 +131,33 @@ double Model::total_mass() const {
   return m;
 }
 
+bool Model::continuous(int i) const {
+  return i >= 1 && i <= n && joints[i].angular() &&
+         !(std::isfinite(lower[i]) && std::isfinite(upper[i]));
+}
+
+double wrap_angle(double q) {
+  if (!std::isfinite(q) || (q > -M_PI && q <= M_PI)) return q;
+  // remainder: q - k 2pi for the nearest integer k, exactly (for the double 2pi), in
+  // [-pi, pi]; -pi is the same point as pi.
+  const double r = std::remainder(q, 2 * M_PI);
+  return r <= -M_PI ? r + 2 * M_PI : r;
+}
+
+int wrap_continuous_joints(const Model& model, Eigen::VectorXd& q) {
+  int changed = 0;
+  for (int i = 1; i <= model.n && model.idx_q(i) < q.size(); ++i) {
+    if (!model.continuous(i)) continue;
+    double& a = q[model.idx_q(i)];
+    const double w = wrap_angle(a);
+    if (w != a) {
+      a = w;
+      ++changed;
+    }
+  }
+  return changed;
+}
+
 void Model::finalize() {
   joints.resize(n + 1);
   joints[0] = JointModel(floating ? JointType::Free : JointType::Fixed);

@@ -373,8 +373,15 @@ class RendererNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "renderer");
-  RendererNode node;
-  ros::spin();
+  // The node's boundary: whatever escapes (a ros::Exception is a std::exception) ends it with
+  // one line and exit code 1, never an abort.
+  try {
+    ros::init(argc, argv, "renderer");
+    RendererNode node;
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("renderer: %s", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -3,10 +3,19 @@
 
 #include <ros/ros.h>
 
+#include <exception>
+
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "simulator");
-  se3_ros::SimulatorNode node;
-  if (!node.init()) return 1;
-  node.run();
+  // The node's boundary: whatever escapes (a ros::Exception such as InvalidNameException is a
+  // std::exception) ends it with one line and exit code 1, never an abort.
+  try {
+    ros::init(argc, argv, "simulator");
+    se3_ros::SimulatorNode node;
+    if (!node.init()) return 1;
+    node.run();
+  } catch (const std::exception& e) {
+    ROS_FATAL("simulator: %s", e.what());
+    return 1;
+  }
   return 0;
 }

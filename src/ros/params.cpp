@@ -195,6 +195,10 @@ std::vector<se3::ControllerSpec> controllers_from_params(const ros::NodeHandle& 
                                                          const std::vector<std::string>& names) {
   std::vector<XmlRpcValue> configs;
   for (const std::string& name : names) {
+    // Checked before the parameter server is asked: roscpp throws for a name it cannot resolve.
+    if (const std::string why = se3::controller_name_problem(name); !why.empty()) {
+      throw se3::ControllerError("~controllers: " + why);
+    }
     XmlRpcValue v;
     if (!nh.getParam(name, v)) {
       throw se3::ControllerError("no controller '" + name + "' on the parameter server (" +

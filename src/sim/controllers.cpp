@@ -144,6 +144,39 @@ const char* status_name(TrajectoryStatus s) {
   return "";
 }
 
+// ------------------------------------------------------------------ names
+
+namespace {
+bool ascii_letter(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z');
+}
+bool ascii_digit(char c) {
+  return c >= '0' && c <= '9';
+}
+}  // namespace
+
+bool is_controller_name(const std::string& name) {
+  if (name.empty() || !ascii_letter(name[0]) || name.back() == '/') return false;
+  for (size_t k = 1; k < name.size(); ++k) {
+    const char c = name[k];
+    if (!(ascii_letter(c) || ascii_digit(c) || c == '_' || c == '/')) return false;
+    if (c == '/' && name[k - 1] == '/') return false;
+  }
+  return true;
+}
+
+std::string controller_name_problem(const std::string& name) {
+  if (is_controller_name(name)) return "";
+  std::string shown;
+  for (const char c : name.substr(0, 60)) {
+    const auto u = static_cast<unsigned char>(c);
+    shown += u < 0x20 || u == 0x7f ? '?' : c;
+  }
+  return "controller name '" + shown + (name.size() > 60 ? "...'" : "'") +
+         " is not a ROS name (a letter, then letters, digits, '_' or '/'): its topic is "
+         "NAME/command";
+}
+
 // ------------------------------------------------------------------ YAML
 
 namespace {
@@ -304,6 +337,9 @@ void parse_trajectory_keys(const Reader& r, const YAML::Node& node, ControllerSp
 ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
                                 const std::string& where) {
   const Reader r(where, name);
+  if (const std::string why = controller_name_problem(name); !why.empty()) {
+    throw ControllerError(where + ": " + why);
+  }
   if (!node.IsMap()) r.fail(node, "needs a map {type: ..., joints: [...], ...}");
   ControllerSpec s;
   s.name = name;
@@ -410,6 +446,11 @@ std::vector<ControllerSpec> parse_controllers(const YAML::Node& map,
   if (names.empty()) {
     for (const auto& kv : map) {
       if (!kv.first.IsScalar()) throw ControllerError(where + ": a controller name is not text");
+      if (const std::string why = controller_name_problem(kv.first.Scalar()); !why.empty()) {
+        std::string at = where;
+        if (kv.first.Mark().line >= 0) at += ":" + std::to_string(kv.first.Mark().line + 1);
+        throw ControllerError(at + ": " + why);
+      }
       out.push_back(parse_controller(kv.first.Scalar(), kv.second, where));
     }
     return out;
@@ -474,6 +515,9 @@ ControllerSet::ControllerSet(const Model& model, const std::vector<ControllerSpe
   // Binding errors name where the controller (or its joint) was written, when it was read.
   auto at = [](const std::string& where) { return where.empty() ? where : where + ": "; };
   for (const ControllerSpec& s : specs) {
+    if (const std::string why = controller_name_problem(s.name); !why.empty()) {
+      throw ControllerError(why);
+    }
     if (!names.insert(s.name).second) {
       throw ControllerError(at(s.where) + "controller '" + s.name + "' is given twice");
     }
@@ -568,7 +612,13 @@ std::string ControllerSet::set_command(int c, const double* values, size_t n) {
       return "controller '" + k.spec.name + "': non-finite value for '" + k.spec.joints[j] + "'";
     }
   }
-  for (size_t j = 0; j < n; ++j) k.command[j] = values[j];
+  // A position target of a continuous joint as a point of its circle (an angle of 1e15 rad
+  // would leave the error target - q no correct digit).
+  const bool position =
+      k.spec.kind == ControllerKind::Position || k.spec.kind == ControllerKind::GroupPosition;
+  for (size_t j = 0; j < n; ++j) {
+    k.command[j] = position && model_.continuous(k.joint[j]) ? wrap_angle(values[j]) : values[j];
+  }
   return "";
 }
 

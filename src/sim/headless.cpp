@@ -15,12 +15,31 @@
 namespace se3 {
 namespace {
 
-void write_header(std::ofstream& out, const Model& m) {
+// A header cell as RFC 4180 has it: quoted (with its quotes doubled) when it holds a comma or
+// a quote (object names may).
+std::string csv_cell(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+void write_header(std::ofstream& out, const Simulator& sim) {
+  const Model& m = sim.model();
   out << "t,base_x,base_y,base_z,base_qx,base_qy,base_qz,base_qw";
   if (m.floating) out << ",base_wx,base_wy,base_wz,base_vx,base_vy,base_vz";
   for (int i = 1; i <= m.n; ++i) out << ",q:" << m.joint_name[i];
   for (int i = 1; i <= m.n; ++i) out << ",v:" << m.joint_name[i];
-  out << ",kinetic,potential\n";
+  out << ",kinetic,potential";
+  // Every free object, in the scene's order: world pose (position, quaternion x y z w) and
+  // twist in its own frame (angular first), as the base's.
+  static const char* const kObjectColumns[] = {"x",  "y",  "z",  "qx", "qy", "qz", "qw",
+                                               "wx", "wy", "wz", "vx", "vy", "vz"};
+  for (const ObjectState& o : sim.objects()) {
+    if (o.is_static) continue;
+    for (const char* c : kObjectColumns) out << ',' << csv_cell("obj:" + o.name + ":" + c);
+  }
+  out << '\n';
 }
 
 void write_row(std::ofstream& out, Simulator& sim) {
@@ -41,6 +60,13 @@ void write_row(std::ofstream& out, Simulator& sim) {
   for (int k = 0; k < x.q.size(); ++k) put(x.v[off + k]);
   put(sim.kinetic_energy());
   put(sim.potential_energy());
+  for (const ObjectState& o : sim.objects()) {
+    if (o.is_static) continue;
+    for (int k = 0; k < 3; ++k) put(o.pose.p[k]);
+    const Eigen::Vector4d qo = quaternion_from_rotation(o.pose.R);
+    for (int k = 0; k < 4; ++k) put(qo[k]);
+    for (int k = 0; k < 6; ++k) put(o.twist[k]);
+  }
   out << '\n';
 }
 
@@ -103,6 +129,13 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
                                 " steps, more than the " + figure(limits::kMaxSteps) +
                                 " one run may take (docs/robustness.md)");
   }
+  // A run rounds duration / dt to whole steps: one that would take none is a mistake (a dt
+  // written in the wrong unit, a duration of 0), not a success.
+  if (!(std::llround(steps_asked) >= 1)) {
+    throw std::invalid_argument(
+        "duration " + figure(o.duration) + " s is less than half the step dt " + figure(scene.dt) +
+        " s: the run would take no step (a duration of at least dt takes one)");
+  }
 
   Model model = scene_model(scene);
   const double bodies = model.n + 1;
@@ -141,7 +174,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   if (!o.out_csv.empty()) {
     csv.open(o.out_csv);
     if (!csv) throw std::invalid_argument("cannot write '" + o.out_csv + "'");
-    write_header(csv, sim.model());
+    write_header(csv, sim);
     write_row(csv, sim);
   }
 

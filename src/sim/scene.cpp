@@ -350,6 +350,8 @@ State scene_state(const Scene& scene, const Model& model) {
   for (const auto& kv : scene.initial_positions) {
     x.q[model.idx_q(index(kv.first, "initial_positions"))] = kv.second;
   }
+  // A continuous joint's angle as its configuration space has it: in (-pi, pi].
+  wrap_continuous_joints(model, x.q);
   for (const auto& kv : scene.initial_velocities) {
     x.v[model.idx_v(index(kv.first, "initial_velocities"))] = kv.second;
   }

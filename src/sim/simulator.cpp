@@ -126,6 +126,7 @@ void Simulator::set_initial_state(const State& s) {
   }
   if (!s.finite()) throw std::invalid_argument("initial state is not finite");
   initial_ = s;
+  wrap_continuous_joints(*model_, initial_.q);
 }
 
 void Simulator::set_state(const State& s) {
@@ -138,6 +139,7 @@ void Simulator::set_state(const State& s) {
     throw std::invalid_argument("state is not finite (or its rotation not orthonormal)");
   state_.base = s.base;
   state_.q = s.q;
+  wrap_continuous_joints(*model_, state_.q);
   state_.v = s.v;
   last_good_ = state_;
   last_checked_ = state_;
@@ -594,13 +596,33 @@ void save(const State& from, State& to) {
 
 }  // namespace
 
-// State::finite() with every rate within max_rate, in one pass over each vector.
+namespace {
+
+// A free object's state finite (pose and twist) with every twist component within lim.
+bool object_ok(const State& b, double lim) {
+  bool ok = detail::all_finite(3, b.base.p.data());
+  for (int k = 0; k < 6; ++k) ok &= std::abs(b.v[k]) <= lim;
+  return ok && is_rotation(b.base.R);
+}
+
+// x as "1.5e+300" (std::to_string prints every digit of 1e300).
+std::string figure(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+}  // namespace
+
+// State::finite() with every rate within max_rate, in one pass over each vector; the same for
+// every free object (its pose finite, no twist component above max_rate).
 bool Simulator::rates_ok() const {
   // A NaN fails the comparison and an infinity exceeds the limit.
   const double lim = config_.guard.max_rate;
   const double* v = state_.v.data();
   bool ok = detail::all_finite(model_->n, state_.q.data());
   for (int k = 0; k < model_->nv; ++k) ok &= std::abs(v[k]) <= lim;
+  for (const State& b : body_states_) ok &= object_ok(b, lim);
   if (!model_->floating) return ok;  // a fixed base does not move: no stepper writes it
   return ok && detail::all_finite(3, state_.base.p.data()) && is_rotation(state_.base.R);
 }
@@ -693,6 +715,15 @@ void Simulator::roll_back(const StepInfo& info) {
     why = info.reason;
   } else if (!state_.finite()) {
     why = "non-finite state";
+  } else if (const int j = first_bad_object(); j >= 0) {
+    const State& b = body_states_[j];
+    const std::string& name = object_specs_[bodies_[j].index].name;
+    if (!b.base.p.allFinite() || !is_rotation(b.base.R) || !b.v.allFinite()) {
+      why = "object '" + name + "': non-finite pose or twist";
+    } else {
+      why = "object '" + name + "': a rate of " + figure(b.v.cwiseAbs().maxCoeff()) +
+            " exceeds the limit " + figure(config_.guard.max_rate);
+    }
   } else if (!rates_ok()) {
     why = "a rate of " + num(state_.v.cwiseAbs().maxCoeff()) + " exceeds the limit " +
           num(config_.guard.max_rate);
@@ -718,6 +749,13 @@ void Simulator::roll_back(const StepInfo& info) {
              " s";
   stepper_->restart();
   passive_power_ = passive_power();
+}
+
+int Simulator::first_bad_object() const {
+  for (size_t j = 0; j < body_states_.size(); ++j) {
+    if (!object_ok(body_states_[j], config_.guard.max_rate)) return static_cast<int>(j);
+  }
+  return -1;
 }
 
 double Simulator::passive_power() const {
