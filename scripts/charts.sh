@@ -4,7 +4,8 @@
 # python3-matplotlib. The work-precision charts hold MuJoCo 2.2's and DART 6.12's integrators
 # beside ours; study_*.png reproduce the measures of Erez, Tassa and Todorov (ICRA 2015) with
 # se3_sim, MuJoCo and DART in one run; stability.png shows where methods fail (docs/peers.md).
-# Installs what is missing (with the peers MuJoCo and DART, and python3-matplotlib) and builds
+# Installs what is missing (scripts/deps.sh --charts: the peers MuJoCo and DART, and
+# python3-matplotlib) and builds
 # first; CHARTS_BIN overrides where charts_data is (then nothing is built).
 # Usage: scripts/charts.sh [--quick] [--only work|energy|dynamics|study|stability]
 #   (--quick: shorter runs, for a smoke test; --only: one part, the other charts are left as
@@ -12,10 +13,7 @@
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 if [[ -z "${CHARTS_BIN:-}" ]]; then
-  bash "$repo/scripts/deps.sh" --test
-  /usr/bin/python3 -c 'import matplotlib' 2>/dev/null ||
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
-      python3-matplotlib >/dev/null
+  bash "$repo/scripts/deps.sh" --charts
   bash "$repo/scripts/build.sh"
 fi
 source "$repo/scripts/env.sh"  # SE3_SIM_WS, the workspace

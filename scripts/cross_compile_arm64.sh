@@ -27,6 +27,9 @@ status=0
 if ! command -v "$cxx" > /dev/null; then
   echo "$cxx is not installed (scripts/deps.sh --test installs g++-aarch64-linux-gnu)" >> "$log"
   status=1
+elif ! command -v file > /dev/null; then
+  echo "file is not installed (scripts/deps.sh --test installs file)" >> "$log"
+  status=1
 else
   cd "$repo"
   jobs=()

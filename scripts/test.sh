@@ -4,6 +4,11 @@
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 bash "$repo/scripts/deps.sh" --test
+# A check of its own (check-deps.xml): every program and python3 module that the scripts, tests
+# and launch files call is declared in scripts/deps.txt, and what deps.sh installed is there.
+mkdir -p "$repo/.build"
+rm -f "$repo/.build/check-deps.xml"
+python3 "$repo/scripts/check_deps.py" --junit "$repo/.build/check-deps.xml" || true
 bash "$repo/scripts/build.sh"
 source "$repo/scripts/env.sh"
 ws=$SE3_SIM_WS
@@ -28,7 +33,8 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/p
   -j1 run_tests >> "$repo/.build/test.log" 2>&1 || true
 wait "$background" || true
 # (written aside: run_tests clears test_results/se3_sim when it starts)
-mv -f "$repo/.build/check-cross_compile_arm64.xml" "$ws/build/test_results/se3_sim/" 2>/dev/null || true
+mv -f "$repo/.build/check-cross_compile_arm64.xml" "$repo/.build/check-deps.xml" \
+  "$ws/build/test_results/se3_sim/" 2>/dev/null || true
 # The sanitizer gtests run, the fuzz corpus replayed and each fuzz target run for a few seconds;
 # their results join the others (scripts/sanitize.sh).
 bash "$repo/scripts/sanitize.sh" --no-build --results "$ws/build/test_results" || true

@@ -5,7 +5,7 @@ catkin writes, per gtest binary, gtest-<name>.xml; per rostest, rostest-<name>.x
 case per test node (did it run and pass), and the test node's own cases are in
 rosunit-<test-name>.xml. Counted: the gtest cases, the test nodes' own cases, and a rostest
 wrapper case only when it failed (a node that died or never started leaves no inner cases), and
-the cases of scripts/test.sh's own checks, check-<name>.xml (the arm64 cross-compile). A
+the cases of scripts/test.sh's own checks, check-<name>.xml (the arm64 cross-compile, the deps check). A
 binary that crashed or never wrote results leaves MISSING-*.xml, counted as one failure. Prints the failed cases, then one line
 'N passed, N failed' (', N skipped' when some were skipped); exits 1 on any failure or when no
 test ran.

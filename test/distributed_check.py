@@ -66,6 +66,9 @@ class DistributedTest(unittest.TestCase):
         self.ns = "se3sim%d" % os.getpid()
         self.veth = ("se3h%d" % (os.getpid() % 100000), "se3n%d" % (os.getpid() % 100000))
         self.here_ip, self.there_ip = "10.213.%d.1" % n, "10.213.%d.2" % n
+        # ip is installed by scripts/deps.sh --test: without it this is a failure, not a skip
+        self.assertTrue(shutil.which("ip"), "ip not found on PATH: install the Debian package "
+                        "iproute2 (scripts/deps.sh --test)")
         if os.environ.get("SE3_SIM_NO_NETNS"):  # to see the skip path where netns do work
             self.reason = "SE3_SIM_NO_NETNS is set"
             self.ns = None
