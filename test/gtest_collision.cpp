@@ -232,7 +232,9 @@ TEST(Collision, MeshHullOnItsFaceGivesSpreadContacts) {
   ASSERT_EQ(d.contacts.size(), 4u);
   for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_NEAR(d.contacts[i].depth, 0.001, 1e-5);
-    if (i) EXPECT_GE(d.contacts[i - 1].depth + 1e-15, d.contacts[i].depth) << "deepest first";
+    if (i) {
+      EXPECT_GE(d.contacts[i - 1].depth + 1e-15, d.contacts[i].depth) << "deepest first";
+    }
     for (std::size_t j = 0; j < i; ++j) {
       const Vec3 dp = d.contacts[i].point - d.contacts[j].point;
       EXPECT_GE(std::hypot(dp.x(), dp.y()), 0.99 * std::sqrt(2.0) * r) << i << " " << j;
@@ -517,7 +519,9 @@ TEST(Collision, BoxPrefilterNeverDropsAPairWithinTheMargin) {
     const bool expect = gap < opt.margin;
     (expect ? near : far) += 1;
     ASSERT_EQ(!d.contacts.empty(), expect) << "trial " << trial << ": gap " << gap;
-    if (expect) EXPECT_NEAR(-d.contacts[0].depth, gap, 1e-4) << "trial " << trial;
+    if (expect) {
+      EXPECT_NEAR(-d.contacts[0].depth, gap, 1e-4) << "trial " << trial;
+    }
   }
   EXPECT_GT(near, 100);
   EXPECT_GT(far, 100);

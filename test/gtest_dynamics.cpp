@@ -609,7 +609,9 @@ TEST(Dynamics, MinvPicksItsRouteBySize) {
     const bool arm = c.label.find("ur5") != std::string::npos ||
                      c.label.find("panda") != std::string::npos ||
                      c.label.find("iiwa") != std::string::npos;
-    if (arm && !c.model.floating) EXPECT_TRUE(Data(c.model).minv_by_factor) << c.label;
+    if (arm && !c.model.floating) {
+      EXPECT_TRUE(Data(c.model).minv_by_factor) << c.label;
+    }
     if (c.label.find("solo12") != std::string::npos && c.model.floating) {
       EXPECT_FALSE(Data(c.model).minv_by_factor) << c.label;
     }

@@ -44,6 +44,8 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/gain_check.h", "sim"},
     {"se3_sim/scene_collision.h", "sim"},
     {"se3_sim/sensors.h", "sim"},
+    {"se3_sim/trajectory.h", "sim"},
+    {"se3_sim/transmissions.h", "sim"},
     {"se3_sim/ros/convert.h", "ros"},
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},

@@ -1,4 +1,4 @@
-#include "dynamics/tree_depth.h"
+#include "tree_depth.h"
 #include "lie/simd.h"
 #include "se3_sim/dynamics.h"
 
