@@ -1,5 +1,6 @@
 // se3_dyn simulate and render: thin front ends over the library's simulate_headless and
 // render_to_png.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -57,9 +58,9 @@ int cmd_simulate(int argc, char** argv) {
         "constraint error max: %s\n",
         fig(r.energy_drift_rel).c_str(), fig(r.momentum_drift_rel).c_str(),
         fig(r.constraint_error_max).c_str());
-    std::string by = se3::steps_by_scheme(r);
-    for (char& ch : by) ch = ch == '"' ? ' ' : ch;
-    std::printf("steps by scheme:%s; limit impacts located: %llu\n", by.c_str(),
+    std::string by = se3::steps_by_scheme(r);  // "rkmk4": 9800, ... without the quotes
+    by.erase(std::remove(by.begin(), by.end(), '"'), by.end());
+    std::printf("steps by scheme: %s; limit impacts located: %llu\n", by.c_str(),
                 static_cast<unsigned long long>(r.events));
     if (!std::isnan(r.penetration_max)) {
       std::printf("penetration max: %s m\n", fig(r.penetration_max).c_str());
