@@ -17,6 +17,7 @@
 #include <string>
 
 #include "../src/sim/scene_reader.h"
+#include "error_of.h"
 #include "se3_sim/geometry.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/sim.h"
@@ -47,16 +48,7 @@ std::string temp_file(const std::string& name, const std::string& text) {
   return path;
 }
 
-// The message of the exception f throws ("" when it throws none).
-template <class E>
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  }
-  return "";
-}
+using se3_test::error_of;
 
 // Runs f on a thread with a small stack (512 kB), as ROS callbacks and other threads may have:
 // what recursed once per link or per level needs far more for the inputs below (the recursive

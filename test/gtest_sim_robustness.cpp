@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../src/dynamics/tree_depth.h"
+#include "error_of.h"
 #include "se3_sim/constraint.h"
 #include "se3_sim/controllers.h"
 #include "se3_sim/sim.h"
@@ -35,15 +36,7 @@ std::string temp_file(const std::string& name, const std::string& text) {
   return path;
 }
 
-template <class E>
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  }
-  return "";
-}
+using se3_test::error_of;
 
 // Output and exit code of a shell command (stderr into the output).
 std::string run(const std::string& cmd, int& rc) {

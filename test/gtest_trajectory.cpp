@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "error_of.h"
 #include "se3_sim/controllers.h"
 #include "se3_sim/sim.h"
 #include "se3_sim/trajectory.h"
@@ -113,12 +114,7 @@ double eval(const Eigen::Matrix<double, 6, 1>& c, double s) {
 }
 
 std::string controller_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ControllerError& e) {
-    return e.what();
-  }
-  return "";
+  return se3_test::error_of<ControllerError>(f);
 }
 
 }  // namespace
