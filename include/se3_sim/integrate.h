@@ -163,7 +163,7 @@ struct LimitEventWorkspace {
   State x0, x1;           ///< the sub-step's start and trial states
   std::vector<int> rows;  ///< struck limits: +(i) lower, -(i) upper
   MatX W;                 ///< J D^-1 J^T of the struck limits
-  VecX rhs, lambda, dv;
+  VecX rhs, lambda;
 };
 
 class Stepper {

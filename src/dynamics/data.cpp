@@ -1,6 +1,6 @@
-#include "tree_depth.h"
 #include "lie/simd.h"
 #include "se3_sim/dynamics.h"
+#include "tree_depth.h"
 
 namespace se3 {
 

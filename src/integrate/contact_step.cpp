@@ -305,8 +305,7 @@ LimitEventWorkspace::LimitEventWorkspace(const Model& model)
       x1(model),
       W(MatX::Zero(2 * model.n + 1, 2 * model.n + 1)),
       rhs(VecX::Zero(2 * model.n + 1)),
-      lambda(VecX::Zero(2 * model.n + 1)),
-      dv(VecX::Zero(model.nv)) {
+      lambda(VecX::Zero(2 * model.n + 1)) {
   rows.reserve(2 * model.n + 1);
 }
 
