@@ -7,7 +7,7 @@
 # Installs what is missing (scripts/deps.sh --charts: the peers MuJoCo and DART, and
 # python3-matplotlib) and builds
 # first; CHARTS_BIN overrides where charts_data is (then nothing is built).
-# Usage: scripts/charts.sh [--quick] [--only work|energy|dynamics|study|stability]
+# Usage: scripts/charts.sh [--quick] [--only work|limits|energy|dynamics|study|stability]
 #   (--quick: shorter runs, for a smoke test; --only: one part, the other charts are left as
 #   they are)
 set -euo pipefail

@@ -58,6 +58,9 @@ TITLES = {
     "free_body": "torque-free axisymmetric body, 10 s (exact solution)",
     "satellite_arm": "7-dof satellite arm, zero gravity, 4 s",
     "chain20_gravity": "20-link chain, fixed base, gravity, 1 s",
+    "free_body_tossed": "axisymmetric link tossed under gravity, 4 s (exact solution)",
+    "satellite_limits": "satellite arm driven into its joint limits (plastic impacts), 2 s; "
+                        "MuJoCo with its own soft limits",
 }
 
 
@@ -87,6 +90,9 @@ def work_precision(data_dir, out_dir, scene):
             continue
         color, marker = STYLE.get(name, ("black", "."))
         label = label_of(name) + (" (tol 1e-3..1e-11)" if name == "rkmk45" else "")
+        if scene == "satellite_limits" and name in ("semi_implicit_euler", "rkmk4", "variational"):
+            label += (", velocity-level limits" if name == "semi_implicit_euler"
+                      else ", located impacts")
         for ax, key in zip(axes, ("cpu_s", "evals")):
             xs = [num(p[key]) for p in pts]
             ys = [max(num(p["err"]), 1e-16) for p in pts]
@@ -314,7 +320,8 @@ def main():
         sys.exit("usage: plot_charts.py DATA_DIR OUT_DIR")
     data_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
-    for scene in ("free_body", "satellite_arm", "chain20_gravity"):
+    for scene in ("free_body", "free_body_tossed", "satellite_arm", "satellite_limits",
+                  "chain20_gravity"):
         if os.path.exists(os.path.join(data_dir, "wp_%s.csv" % scene)):
             work_precision(data_dir, out_dir, scene)
     if os.path.exists(os.path.join(data_dir, "energy.csv")):

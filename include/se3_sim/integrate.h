@@ -145,7 +145,9 @@ Vec6 reexpress_momentum(const SE3& E, const Vec6& P);
 /// the deepest limit's gap is within [-gap_tol, 0]) and applied there as an impulse through the
 /// full D^-1, J v+ = -e J v- on the limits struck (e = restitution above restitution_velocity,
 /// else 0; impulses >= 0), then the step goes on from that instant. A joint resting on its limit
-/// (within rest_gap and not separating) takes the contact scheme's step instead.
+/// (within rest_gap, not separating, and its free acceleration not leaving it) takes the contact
+/// scheme's step instead; one that the free acceleration leaves (after a plastic impact) keeps
+/// the integrator.
 struct LimitEventOptions {
   double gap_tol = 1e-12;             ///< rad or m: an impact is located to this gap
   double time_tol = 1e-14;            ///< s: or to this bracket of the step length

@@ -120,14 +120,33 @@ double row_rate(const Model& m, const VecX& v, int row) {
   return row > 0 ? w : -w;
 }
 
-// Whether a limit is crossed, or touched (gap <= rest_gap) without separating at rest_speed:
-// such a step is the contact scheme's (resting on a limit is a contact, not an event).
-bool limit_touching(const Model& m, const State& x, const LimitEventOptions& o) {
+// Whether the step is the contact scheme's: a limit crossed, or touched (gap <= rest_gap, not
+// separating at rest_speed) while the free acceleration drives into it or holds it (resting on
+// a limit is a contact, not an event). A touched limit that the free acceleration leaves, as
+// at the instant after a plastic impact, keeps the integrator and its order: its step leaves
+// the limit, and a later crossing is located as any other. The acceleration costs one dynamics
+// evaluation, only while a limit is touched.
+bool limit_resting(Stepper& stepper, const State& x, const VecX& tau_cmd,
+                   const LimitEventOptions& o) {
+  const Model& m = stepper.model();
+  bool touching = false;
   for (int i = 1; i <= m.n; ++i) {
     for (int row : {i, -i}) {
       if (!std::isfinite(row > 0 ? m.lower[i] : m.upper[i])) continue;
       const double g = row_gap(m, x.q, row);
-      if (g < -o.gap_tol || (g <= o.rest_gap && row_rate(m, x.v, row) < o.rest_speed)) return true;
+      if (g < -o.gap_tol) return true;
+      touching = touching || (g <= o.rest_gap && row_rate(m, x.v, row) < o.rest_speed);
+    }
+  }
+  if (!touching) return false;
+  const VecX& a = stepper.acceleration(x.base, x.q, x.v, tau_cmd);
+  for (int i = 1; i <= m.n; ++i) {
+    for (int row : {i, -i}) {
+      if (!std::isfinite(row > 0 ? m.lower[i] : m.upper[i])) continue;
+      if (row_gap(m, x.q, row) <= o.rest_gap && row_rate(m, x.v, row) < o.rest_speed &&
+          !(row_rate(m, a, row) > 0)) {
+        return true;
+      }
     }
   }
   return false;
@@ -224,7 +243,7 @@ StepInfo limit_event_step(ConstraintSystem& constraints, Stepper& stepper, State
   StepInfo total;
   double left = h;
   for (int events = 0;; ++events) {
-    if (events > o.max_events || limit_touching(m, x, o)) {
+    if (events > o.max_events || limit_resting(stepper, x, tau_cmd, o)) {
       StepInfo rest =
           velocity_level_step(constraints, stepper, x, tau_cmd, left, bodies, in, nullptr);
       add_counts(rest, total);

@@ -138,12 +138,13 @@ std::string planar_chain_urdf(int n, double L) {
 // ------------------------------------------------------------------ work-precision
 
 void peer_work_precision(const Model& m, const State& x0, const State& ref, double T,
-                         const std::vector<double>& dts, bool damped, std::ofstream& f) {
+                         const std::vector<double>& dts, bool damped, std::ofstream& f,
+                         bool limits) {
   for (const std::string& name : peers::peer_engine_names()) {
     if (name == "mujoco_implicit" && !damped) continue;
     std::unique_ptr<peers::Engine> e;
     try {
-      e = peers::make_engine(name, m, true);
+      e = peers::make_engine(name, m, true, 1e-6, limits);
     } catch (const std::exception& ex) {
       std::printf("  %-17s skipped: %s\n", name.c_str(), ex.what());
       continue;

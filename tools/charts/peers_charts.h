@@ -14,8 +14,11 @@ namespace se3::charts {
 /// Appends to a wp_<scene>.csv (charts_data's columns) the final-state error of every peer
 /// engine of this build (tools/peers/engines.h) at the steps dts, against ref at time T.
 /// `damped`: the scene has joint damping, so MuJoCo's implicit integrator is run too.
+/// `limits`: the model's joint limits are on (MuJoCo's own soft limits; engines without limits
+/// are left out).
 void peer_work_precision(const Model& m, const State& x0, const State& ref, double T,
-                         const std::vector<double>& dts, bool damped, std::ofstream& f);
+                         const std::vector<double>& dts, bool damped, std::ofstream& f,
+                         bool limits = false);
 
 /// study.csv: per model (a 20-link planar chain under gravity, Romeo free-floating in zero
 /// gravity), engine and step, the real-time factor (simulated s per CPU s) and the

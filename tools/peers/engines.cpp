@@ -54,9 +54,10 @@ class OursEngine : public Engine {
 #ifdef SE3_SIM_HAVE_MUJOCO
 class MujocoEngine : public Engine {
  public:
-  MujocoEngine(int integrator, const Model& m, bool passive) {
+  MujocoEngine(int integrator, const Model& m, bool passive, bool limits) {
     MujocoOptions o;
     o.keep_damping = passive;
+    o.limits = limits;
     robot_ = mujoco_from_model(m, o);
     robot_->m()->opt.integrator = integrator;
     evals_ = integrator == mjINT_RK4 ? 4 : 1;
@@ -99,14 +100,20 @@ class DartEngine : public Engine {
 }  // namespace
 
 std::unique_ptr<Engine> make_engine(const std::string& name, const Model& model, bool passive,
-                                    double tol) {
+                                    double tol, bool limits) {
 #ifdef SE3_SIM_HAVE_MUJOCO
-  if (name == "mujoco_euler") return std::make_unique<MujocoEngine>(mjINT_EULER, model, passive);
-  if (name == "mujoco_rk4") return std::make_unique<MujocoEngine>(mjINT_RK4, model, passive);
+  if (name == "mujoco_euler") {
+    return std::make_unique<MujocoEngine>(mjINT_EULER, model, passive, limits);
+  }
+  if (name == "mujoco_rk4")
+    return std::make_unique<MujocoEngine>(mjINT_RK4, model, passive, limits);
   if (name == "mujoco_implicit") {
-    return std::make_unique<MujocoEngine>(mjINT_IMPLICIT, model, passive);
+    return std::make_unique<MujocoEngine>(mjINT_IMPLICIT, model, passive, limits);
   }
 #endif
+  if (limits) {
+    throw std::invalid_argument("engine '" + name + "' is not run with joint limits here");
+  }
 #ifdef SE3_SIM_HAVE_DART
   if (name == "dart_euler") return std::make_unique<DartEngine>(model, passive);
 #endif

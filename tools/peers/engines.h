@@ -33,8 +33,10 @@ class Engine {
 
 /// An engine by name (ours: a stepper registry name). Throws std::invalid_argument for a name
 /// this build lacks, std::runtime_error when a peer cannot load the model.
+/// `limits`: the model's finite joint limits are on (MuJoCo's limit constraints, at their
+/// default softness); an engine of this build without them throws std::invalid_argument.
 std::unique_ptr<Engine> make_engine(const std::string& name, const Model& model, bool passive,
-                                    double tol = 1e-6);
+                                    double tol = 1e-6, bool limits = false);
 /// The peers' engine names available in this build (MuJoCo's, then DART's).
 std::vector<std::string> peer_engine_names();
 /// Display name: "MuJoCo Euler", "DART semi-implicit Euler", ours as it is.

@@ -170,8 +170,17 @@ MujocoRobot::MujocoRobot(const Model& ours, const std::string& urdf_text, const 
     free_dof_ = m_->jnt_dofadr[j];
     for (int k = 0; k < 6; ++k) dof_[k] = free_dof_ + (k < 3 ? 3 + k : k - 3);
   }
-  // Rigid-body dynamics only: no contact, no constraint; passive forces only when kept.
-  m_->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_CONSTRAINT | mjDSBL_ACTUATION | mjDSBL_SENSOR;
+  // Rigid-body dynamics only: no contact, no constraint (but the joint limits when asked);
+  // passive forces only when kept.
+  m_->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_ACTUATION | mjDSBL_SENSOR;
+  if (!mopt.limits) m_->opt.disableflags |= mjDSBL_CONSTRAINT;
+  for (int i = 1; i <= ours.n; ++i) {
+    const int j = mj_name2id(m_, mjOBJ_JOINT, ours.joint_name[i].c_str());
+    const bool limited =
+        mopt.limits && std::isfinite(ours.lower[i]) && std::isfinite(ours.upper[i]);
+    m_->jnt_limited[j] = limited;
+    if (limited) m_->jnt_range[2 * j] = ours.lower[i], m_->jnt_range[2 * j + 1] = ours.upper[i];
+  }
   if (!mopt.keep_damping) m_->opt.disableflags |= mjDSBL_PASSIVE;
   for (int k = 0; k < m_->nv; ++k) {
     m_->dof_damping[k] = 0;

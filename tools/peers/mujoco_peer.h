@@ -43,6 +43,9 @@ struct MujocoOptions {
   /// The URDF text is model_to_urdf(ours): its links are our bodies, so MuJoCo's body frames
   /// are ours (no link offsets). Scenes use this: base inertias and locked joints are in it.
   bool body_frames = false;
+  /// Keep our model's finite joint limits as MuJoCo's limit constraints (jnt_range, default
+  /// solref and solimp); contact stays off.
+  bool limits = false;
 };
 
 /// A robot in MuJoCo, paired with our model of the same URDF. Not copyable.
