@@ -146,7 +146,7 @@ void fill_joint_state(const se3::Model& m, const JointTable& joints, const se3::
   js.velocity.assign(n, 0.0);
   js.effort.assign(n, 0.0);
   for (int i = 1; i <= m.n; ++i) {
-    js.position[i - 1] = x.q[i - 1];
+    js.position[i - 1] = x.q[m.idx_q(i)];
     js.velocity[i - 1] = x.v[m.idx_v(i)];
     js.effort[i - 1] = i - 1 < efforts.size() ? finite_or_zero(efforts[i - 1]) : 0.0;
   }

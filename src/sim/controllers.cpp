@@ -855,7 +855,7 @@ void ControllerSet::update(const State& x, double t, double dt, VecX& tau) {
           break;
         case ControllerKind::GroupPosition:
         case ControllerKind::Position:
-          u = c.pid[j].compute(position_error(i, c.command[j], x.q[i - 1]), dt);
+          u = c.pid[j].compute(position_error(i, c.command[j], x.q[model_.idx_q(i)]), dt);
           break;
         case ControllerKind::Velocity:
         case ControllerKind::GroupVelocity:
@@ -865,7 +865,7 @@ void ControllerSet::update(const State& x, double t, double dt, VecX& tau) {
           TrajectoryState& st = c.state;
           double qd, vd, ad;
           const Track& tr = c.track[j];
-          const double q = x.q[i - 1], v = x.v[iv];
+          const double q = x.q[model_.idx_q(i)], v = x.v[iv];
           if (tr.seg.empty()) {  // never reset: where it stands
             qd = q, vd = ad = 0;
           } else {

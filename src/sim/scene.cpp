@@ -373,7 +373,7 @@ State random_state(const Model& model, unsigned seed) {
       lo = -M_PI;
       hi = M_PI;
     }
-    x.q[i - 1] = lo + (hi - lo) * 0.5 * (unit(rng) + 1.0);
+    x.q[model.idx_q(i)] = lo + (hi - lo) * 0.5 * (unit(rng) + 1.0);
   }
   for (int k = 0; k < model.nv; ++k) x.v[k] = unit(rng);
   return x;

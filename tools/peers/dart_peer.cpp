@@ -59,7 +59,7 @@ DartRobot::DartRobot(const Model& ours, bool keep_damping)
     I.skel->getJoint(k)->setLimitEnforcement(false);
   }
   I.map.resize(ours.nv);
-  for (int k = 0; k < (ours.floating ? 6 : 0); ++k) I.map[k] = k;
+  for (int k = 0; k < ours.nv_base(); ++k) I.map[k] = k;
   for (int i = 1; i <= ours.n; ++i) {
     const dart::dynamics::Joint* j = I.skel->getJoint(ours.joint_name[i]);
     if (!j || j->getNumDofs() != 1) {
@@ -88,7 +88,7 @@ void DartRobot::set_state(const State& x) {
   } else {
     I.world->setGravity(x.base.R.transpose() * I.gravity);
   }
-  for (int i = 1; i <= ours_.n; ++i) I.pos[I.map[ours_.idx_v(i)]] = x.q[i - 1];
+  for (int i = 1; i <= ours_.n; ++i) I.pos[I.map[ours_.idx_v(i)]] = x.q[ours_.idx_q(i)];
   for (int k = 0; k < ours_.nv; ++k) I.vel[I.map[k]] = x.v[k];
   I.skel->setPositions(I.pos);
   I.skel->setVelocities(I.vel);
@@ -102,7 +102,7 @@ void DartRobot::get_state(State& x) const {
     x.base.R = T.linear();
     x.base.p = T.translation();
   }
-  for (int i = 1; i <= ours_.n; ++i) x.q[i - 1] = p[I.map[ours_.idx_v(i)]];
+  for (int i = 1; i <= ours_.n; ++i) x.q[ours_.idx_q(i)] = p[I.map[ours_.idx_v(i)]];
   for (int k = 0; k < ours_.nv; ++k) x.v[k] = v[I.map[k]];
 }
 
@@ -152,7 +152,7 @@ DartMinvCheck dart_minv_check(const Model& ours, const std::string& urdf_text, c
     skel->getJoint(k)->setActuatorType(dart::dynamics::Joint::FORCE);
   }
   std::vector<int> map(ours.nv);
-  for (int k = 0; k < (ours.floating ? 6 : 0); ++k) map[k] = k;
+  for (int k = 0; k < ours.nv_base(); ++k) map[k] = k;
   for (int i = 1; i <= ours.n; ++i) {
     map[ours.idx_v(i)] =
         static_cast<int>(skel->getJoint(ours.joint_name[i])->getIndexInSkeleton(0));
@@ -164,7 +164,7 @@ DartMinvCheck dart_minv_check(const Model& ours, const std::string& urdf_text, c
     T.translation() = x.base.p;
     pos.head<6>() = dart::dynamics::FreeJoint::convertToPositions(T);
   }
-  for (int i = 1; i <= ours.n; ++i) pos[map[ours.idx_v(i)]] = x.q[i - 1];
+  for (int i = 1; i <= ours.n; ++i) pos[map[ours.idx_v(i)]] = x.q[ours.idx_q(i)];
   skel->setPositions(pos);
   const Eigen::MatrixXd M = skel->getMassMatrix(), Mi = skel->getInvMassMatrix();
   const Eigen::MatrixXd Minv = M.inverse();

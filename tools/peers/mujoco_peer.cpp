@@ -253,7 +253,7 @@ std::string MujocoRobot::summary() const {
 
 void MujocoRobot::set_state(const State& x) {
   mjtNum* qpos = d_->qpos;
-  for (int i = 1; i <= ours_.n; ++i) qpos[qpos_[i]] = x.q[i - 1];
+  for (int i = 1; i <= ours_.n; ++i) qpos[qpos_[i]] = x.q[ours_.idx_q(i)];
   if (ours_.floating) {
     const Eigen::Vector4d q = quaternion_from_rotation(x.base.R);
     for (int k = 0; k < 3; ++k) qpos[free_qpos_ + k] = x.base.p[k];
@@ -270,8 +270,8 @@ void MujocoRobot::set_state(const State& x) {
 
 void MujocoRobot::get_state(State& x) const {
   const mjtNum* qpos = d_->qpos;
-  for (int i = 1; i <= ours_.n; ++i) x.q[i - 1] = qpos[qpos_[i]];
-  const int off = ours_.floating ? 6 : 0;
+  for (int i = 1; i <= ours_.n; ++i) x.q[ours_.idx_q(i)] = qpos[qpos_[i]];
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) x.v[k] = d_->qvel[dof_[k]];
   if (ours_.floating) {
     const mjtNum* q = qpos + free_qpos_;
@@ -285,7 +285,7 @@ void MujocoRobot::get_state(State& x) const {
 }
 
 void MujocoRobot::velocity_to_mj(const State& x, const VecX& v, mjtNum* qvel) const {
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) qvel[dof_[k]] = v[k];
   if (ours_.floating) {
     const Vec3 lin = x.base.R * v.segment<3>(3);
@@ -297,7 +297,7 @@ void MujocoRobot::velocity_to_mj(const State& x, const VecX& v, mjtNum* qvel) co
 }
 
 void MujocoRobot::accel_to_mj(const State& x, const VecX& a, mjtNum* qacc) const {
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) qacc[dof_[k]] = a[k];
   if (ours_.floating) {
     const Vec3 w = x.v.head<3>(), v = x.v.segment<3>(3);
@@ -311,7 +311,7 @@ void MujocoRobot::accel_to_mj(const State& x, const VecX& a, mjtNum* qacc) const
 
 void MujocoRobot::accel_from_mj(const State& x, const mjtNum* qacc, VecX& a) const {
   a.resize(ours_.nv);
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) a[k] = qacc[dof_[k]];
   if (ours_.floating) {
     const mjtNum* f = qacc + free_dof_;
@@ -322,7 +322,7 @@ void MujocoRobot::accel_from_mj(const State& x, const mjtNum* qacc, VecX& a) con
 }
 
 void MujocoRobot::force_to_mj(const State& x, const VecX& tau, mjtNum* f) const {
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) f[dof_[k]] = tau[k];
   if (ours_.floating) {
     const Vec3 lin = x.base.R * tau.segment<3>(3);
@@ -335,7 +335,7 @@ void MujocoRobot::force_to_mj(const State& x, const VecX& tau, mjtNum* f) const 
 
 void MujocoRobot::force_from_mj(const State& x, const mjtNum* f, VecX& tau) const {
   tau.resize(ours_.nv);
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < ours_.nv; ++k) tau[k] = f[dof_[k]];
   if (ours_.floating) {
     const mjtNum* b = f + free_dof_;
@@ -352,7 +352,7 @@ MatX MujocoRobot::mass_from_mj(const State& x, const mjtNum* M) const {
   const int n = ours_.nv;
   const Eigen::Map<const RowMat> Mm(M, n, n);
   MatX T = MatX::Zero(n, n);  // MuJoCo velocity = T * ours
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < n; ++k) T(dof_[k], k) = 1;
   if (ours_.floating) {
     T.block<3, 3>(free_dof_, 3) = x.base.R;
@@ -365,7 +365,7 @@ MatX MujocoRobot::minv_from_mj(const State& x, const mjtNum* Minv) const {
   const int n = ours_.nv;
   const Eigen::Map<const RowMat> Mi(Minv, n, n);
   MatX Ti = MatX::Zero(n, n);  // ours = Ti * MuJoCo velocity
-  const int off = ours_.floating ? 6 : 0;
+  const int off = ours_.nv_base();
   for (int k = off; k < n; ++k) Ti(k, dof_[k]) = 1;
   if (ours_.floating) {
     Ti.block<3, 3>(3, free_dof_) = x.base.R.transpose();
