@@ -41,6 +41,7 @@
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/world_services.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "se3_sim/transmissions.h"
 
@@ -446,7 +447,17 @@ void SimulatorNodeImpl::set_initial_positions(
     sim_->set_initial_state(x);
     sim_->reset();
     // Constraints anchor at (and project) the new initial state; controllers are set after.
-    if (!scene_.constraints.empty()) sim_->set_constraints(scene_.constraints);
+    if (!scene_.constraints.empty()) {
+      sim_->set_constraints(scene_.constraints);
+      // set_constraints rebuilt the objects' own collision model without the robot's shapes:
+      // the scene collision goes back on after it, as make_simulator orders them (sim.h).
+      if (se3::uses_scene_collision(scene_)) {
+        const se3::GeometryModel none;
+        const bool robot = !(urdf_xml_.empty() && scene_.robot_path.empty());
+        sim_->set_scene_collision(
+            se3::scene_collision(scene_, &sim_->model(), robot ? nullptr : &none, urdf_xml_));
+      }
+    }
   }
 }
 
