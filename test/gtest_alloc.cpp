@@ -362,6 +362,23 @@ wrist: {type: effort_controllers/JointEffortController, joint: panda_joint7}
   }
 }
 
+// A spawn or delete (world.h) swaps its parts in between steps: the steps after the first one
+// that follows it allocate nothing (the first may size the constraint workspace once).
+TEST(Alloc, StepsAfterASpawnOrDeleteAllocateNothing) {
+  auto sim = make_simulator(
+      load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/quadruped_ground.yaml"));
+  ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
+  sim->spawn_object(parse_scene_object(
+      "name: ball\nshape: {sphere: 0.05}\nmass: 0.5\npose: {position: [5, 5, 50]}\n", "."));
+  const long first = allocations_of([&] { ASSERT_EQ(sim->step_n(1), 1) << sim->failure(); });
+  RecordProperty("first_step_allocations_after_spawn", static_cast<int>(first));
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
+  EXPECT_LT(sim->model_state("ball").pose.p.z(), 50);
+  sim->delete_model("ball");
+  ASSERT_EQ(sim->step_n(1), 1) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
+}
+
 // A trajectory controller (quintic segments, the effort flavour) on the UR5 and a velocity
 // controller through the velocity interface: sampling the splines, the PIDs and the tolerance
 // checks allocate nothing in a step.

@@ -17,6 +17,7 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/scene_objects.h"
 #include "se3_sim/sensors.h"
+#include "se3_sim/world.h"
 
 namespace se3 {
 
@@ -312,6 +313,62 @@ class Simulator {
   std::uint64_t fast_steps() const { return fast_steps_; }
   const std::string& fast_step_warning() const { return fast_step_warning_; }
 
+  // ---- world interface (world.h, src/sim/world.cpp; docs/design.md "World interface"). Models
+  // are the robot (when the simulator has one: a scene of objects alone has none) and the
+  // objects, by name. Objects are spawned and deleted in two parts: prepare_* builds everything
+  // new (shapes, free bodies, collision model, constraint system) and may run in another thread
+  // beside step() (it reads only what commit() and set_objects() change); commit() swaps it in
+  // between two steps (the steps after it allocate nothing once the first has run).
+  /// The robot's model name and namespace (default: Model::name, else "robot"; "" for an
+  /// empty robot, a scene of objects alone). Throws std::invalid_argument for a name an object
+  /// has or one that is not a frame name.
+  void set_robot_name(const std::string& name, const std::string& ns = "");
+  const std::string& robot_name() const { return robot_name_; }
+  /// Every model: the robot first, then the objects in their order.
+  std::vector<WorldModel> world_models() const;
+  /// Throws std::invalid_argument (one line naming the field) for a name in use, a name that is
+  /// not a frame name, a non-finite or absurd pose or twist (|position| > 1e6 m, a rate above
+  /// the guard's max_rate), a free object without a positive mass and inertia.
+  WorldEditPtr prepare_spawn(const SceneObject& object) const;
+  /// Throws std::invalid_argument for an unknown model and for the robot (not deletable).
+  WorldEditPtr prepare_delete(const std::string& name) const;
+  /// Applies a prepared edit: the objects kept keep their states, a spawned one starts at its
+  /// pose and twist at the next step, time runs on. Throws std::invalid_argument (nothing
+  /// changed) when the world changed since the edit was prepared. Returns "" or the
+  /// interpenetration the new world starts with (interpenetration_report).
+  std::string commit(WorldEditPtr edit);
+  /// prepare_spawn and commit.
+  std::string spawn_object(const SceneObject& object);
+  /// prepare_delete and commit.
+  void delete_model(const std::string& name);
+  /// Counts of committed edits (every commit changes the generation).
+  std::uint64_t world_generation() const { return world_generation_; }
+  std::uint64_t spawned() const { return spawned_; }
+  std::uint64_t deleted() const { return deleted_; }
+  /// The state of a model (world.h ModelState). Throws std::invalid_argument for an unknown one.
+  ModelState model_state(const std::string& name);
+  /// Sets a model's state: a robot's base pose and twist (a fixed base: its pose, twist zero)
+  /// and joints (sizes n; continuous joints wrapped), a free object's pose and twist, a static
+  /// object's pose (its new place, also after a reset). Throws std::invalid_argument (nothing
+  /// changed) for an unknown model, wrong sizes, a non-finite or absurd value, a twist for what
+  /// cannot move. Accepted when it interpenetrates: returns interpenetration_report().
+  std::string set_model_state(const std::string& name, const ModelState& state);
+  /// Every link's name: the robot's URDF links, then each object's (its name).
+  std::vector<std::string> link_names() const;
+  /// A link's state in the world, or relative to link `reference` ("" for the world). Names
+  /// are link names, or MODEL::LINK. Throws std::invalid_argument for an unknown link.
+  LinkState link_state(const std::string& link, const std::string& reference = "");
+  /// Sets the state (world frame) of a model's root link: the robot's base link, an object.
+  /// Another link is refused (its pose follows from the joints: set_model_state).
+  std::string set_link_state(const std::string& link, const LinkState& state);
+  /// "" or one line naming the deepest pair of the collision layer that interpenetrates (depth
+  /// > 0) at the current state, and by how much.
+  std::string interpenetration_report();
+  /// Reset of the world: the robot's state, the objects' poses and twists (spawned ones to
+  /// their spawn states), commands and controllers as reset() does, but the time and the step
+  /// count run on (reset() sets them to 0).
+  void reset_world();
+
   // ---- stepping
   /// One step of dt. On divergence returns false, rolls the state back to the last good one
   /// and keeps the reason in failure() until reset().
@@ -414,6 +471,18 @@ class Simulator {
   /// returns the deepest penetration (m, >= 0).
   double collide_objects();
 
+  friend struct WorldEdit;
+  /// The robot's index in world_models (0) or -1; objects by name (index into object_specs_).
+  int object_index(const std::string& name) const;
+  /// An object's body (index into bodies_) or -1 for a static one.
+  int body_of(int object) const;
+  /// Checks a new model name (unique, a frame name); throws std::invalid_argument.
+  void check_new_name(const std::string& name) const;
+  /// The edit that replaces the objects by `specs` (kept ones by name keep their states).
+  WorldEditPtr prepare_objects(std::vector<SceneObject> specs) const;
+
+  std::string robot_name_, robot_ns_;
+  std::uint64_t world_generation_ = 0, spawned_ = 0, deleted_ = 0;
   std::unique_ptr<Model> model_;
   SimConfig config_;
   std::vector<SceneObject> object_specs_;

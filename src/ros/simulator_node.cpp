@@ -40,6 +40,8 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
+#include "se3_sim/ros/world_services.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "se3_sim/transmissions.h"
 
@@ -266,6 +268,8 @@ class SimulatorNodeImpl {
   std::vector<std::string> sensor_frames_;
   std::vector<geometry_msgs::TransformStamped> sensor_tfs_;  ///< link -> sensor frame (static)
   std::string urdf_xml_;
+  std::unique_ptr<WorldServices> world_;  ///< simulator/spawn_entity etc., model_states
+  void setup_world_services();
 };
 
 // ------------------------------------------------------------------ setup
@@ -443,7 +447,17 @@ void SimulatorNodeImpl::set_initial_positions(
     sim_->set_initial_state(x);
     sim_->reset();
     // Constraints anchor at (and project) the new initial state; controllers are set after.
-    if (!scene_.constraints.empty()) sim_->set_constraints(scene_.constraints);
+    if (!scene_.constraints.empty()) {
+      sim_->set_constraints(scene_.constraints);
+      // set_constraints rebuilt the objects' own collision model without the robot's shapes:
+      // the scene collision goes back on after it, as make_simulator orders them (sim.h).
+      if (se3::uses_scene_collision(scene_)) {
+        const se3::GeometryModel none;
+        const bool robot = !(urdf_xml_.empty() && scene_.robot_path.empty());
+        sim_->set_scene_collision(
+            se3::scene_collision(scene_, &sim_->model(), robot ? nullptr : &none, urdf_xml_));
+      }
+    }
   }
 }
 
@@ -557,7 +571,47 @@ bool SimulatorNodeImpl::init() {
       nh_.advertiseService("simulator/apply_wrench", &SimulatorNodeImpl::on_apply_wrench, this));
   services_.push_back(nh_.advertiseService("simulator/clear_wrenches",
                                            &SimulatorNodeImpl::on_clear_wrenches, this));
+  setup_world_services();
   return true;
+}
+
+// The world services (world_services.h) over this node's simulator, lock, pause, step and reset.
+void SimulatorNodeImpl::setup_world_services() {
+  WorldHooks h;
+  h.with_sim = [this](const std::function<void(se3::Simulator&)>& f) {
+    std::lock_guard<TurnMutex> lock(mu_);
+    f(*sim_);
+  };
+  h.paused = [this] { return paused_; };
+  h.set_paused = [this](bool pause) {
+    if (request_.active) end_step_request(false, "interrupted by simulator/set_simulation_state");
+    if (!pause) {
+      anchor_ = Clock::now();
+      anchored_ = 0;
+    }
+    paused_ = pause;
+  };
+  h.step = [this](std::uint64_t n, std::string* why) {
+    se3_sim::Step::Request req;
+    se3_sim::Step::Response res;
+    req.steps = n;
+    on_step(req, res);
+    *why = res.message;
+    return static_cast<bool>(res.success);
+  };
+  h.after_reset = [this](bool) {
+    if (request_.active) end_step_request(false, "interrupted by simulator/reset_simulation");
+    if (sensors_) sensors_->reset();
+    status_.clear();
+    anchor_ = Clock::now();
+    anchored_ = 0;
+    publish_clock();
+  };
+  const std::string dir = scene_.file.empty() ? get_text(pnh_, "cwd").value_or(".")
+                          : scene_.file.find('/') == std::string::npos
+                              ? std::string(".")
+                              : scene_.file.substr(0, scene_.file.find_last_of('/'));
+  world_ = std::make_unique<WorldServices>(nh_, pnh_, std::move(h), world_frame_, dir);
 }
 
 // ------------------------------------------------------------------ main loop
@@ -610,6 +664,7 @@ void SimulatorNodeImpl::run() {
         if (!lockstep_) publish_state();
         publish_stats_and_markers(now);
         publish_controller_states();
+        if (world_) world_->publish(*sim_, now, stamp());
       }
       next_pub += pub_period;
       if (next_pub <= now) next_pub = now + pub_period;  // fell behind: skip, keep the rate
@@ -1216,6 +1271,8 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   st.accepted_commands = accepted_;
   st.rejected_commands = rejected_;
   st.dropped_commands = dropped_;
+  st.spawned = sim_->spawned();
+  st.deleted = sim_->deleted();
   st.paused = paused_;
   st.status = status_;
   period_steps_ = 0;

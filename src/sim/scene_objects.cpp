@@ -144,7 +144,8 @@ Shape read_shape(const SceneReader& r, const Field& v, const std::string& base_d
   return s;
 }
 
-SceneObject read_object(const SceneReader& r, const Field& item, const std::string& base_dir) {
+SceneObject read_object(const SceneReader& r, const Field& item, const std::string& base_dir,
+                        const std::string& default_name = "") {
   SceneObject o;
   o.line = item.line;
   bool has_shape = false;
@@ -202,6 +203,7 @@ SceneObject read_object(const SceneReader& r, const Field& item, const std::stri
       o.material.has_color = true;
     }
   }
+  if (o.name.empty()) o.name = default_name;
   if (o.name.empty()) r.fail(item, "'" + item.key + "' needs a name");
   if (!has_shape) r.fail(item, "'" + item.key + "' (" + o.name + ") needs a shape");
   o.material.name = o.name;
@@ -242,6 +244,11 @@ SceneObject read_object(const SceneReader& r, const Field& item, const std::stri
 }
 
 }  // namespace
+
+SceneObject read_scene_object(const SceneReader& r, const Field& v, const std::string& base_dir,
+                              const std::string& default_name) {
+  return read_object(r, v, base_dir, default_name);
+}
 
 void read_scene_objects(const SceneReader& r, const Field& v, const std::string& base_dir,
                         std::vector<SceneObject>& out) {

@@ -14,6 +14,10 @@ namespace se3 {
 /// name, non-unit quaternion, ...).
 void read_scene_objects(const SceneReader& r, const SceneReader::Field& v,
                         const std::string& base_dir, std::vector<SceneObject>& out);
+/// One entry of `objects:` (a map of its keys), checked as read_scene_objects checks each; a
+/// map without `name` gets default_name (none: an error).
+SceneObject read_scene_object(const SceneReader& r, const SceneReader::Field& v,
+                              const std::string& base_dir, const std::string& default_name = "");
 /// A 3x3 inertia about a centre: [ixx, iyy, izz], six values (ixx, iyy, izz, ixy, ixz, iyz) or
 /// a symmetric 3x3 list; positive definite and within the triangle inequality.
 Mat3 read_inertia(const SceneReader& r, const SceneReader::Field& f);

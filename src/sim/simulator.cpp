@@ -84,6 +84,10 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
   }
   set_initial_state(initial);
   reset();
+  // An empty robot (a scene of objects alone: fixed, massless, no joints) is no model.
+  if (model_->n > 0 || model_->floating || model_->total_mass() > 0) {
+    robot_name_ = model_->name.empty() ? "robot" : model_->name;
+  }
 }
 
 Simulator::~Simulator() = default;

@@ -1,0 +1,68 @@
+// The world interface of a Simulator (sim.h, docs/design.md "World interface"): the models it
+// holds (the robot and the scene objects), spawning and deleting objects between steps, and the
+// state of a model or a link, read and set. Shaped after ROS 2's simulation_interfaces (entities,
+// entity states), which the ROS layer serves (docs/ros.md).
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "se3_sim/dynamics.h"
+#include "se3_sim/scene_objects.h"
+
+namespace se3 {
+
+/// A refused world request (a std::invalid_argument: one line naming the field), with its kind
+/// (the ROS layer's result codes follow it).
+struct WorldError : std::invalid_argument {
+  enum class Kind { NotFound, NameInUse, NameInvalid, InvalidPose, Invalid, Stale };
+  WorldError(Kind k, const std::string& what) : std::invalid_argument(what), kind(k) {}
+  Kind kind;
+};
+
+/// One model of the world (Simulator::world_models).
+struct WorldModel {
+  std::string name;
+  std::string kind;        ///< "robot" or "object"
+  std::string ns;          ///< the robot's namespace ("" for objects and the node's own robot)
+  bool is_static = false;  ///< a static object (fixed in the world) or a fixed-base robot
+};
+
+/// The state of a model (Simulator::model_state / set_model_state): its root frame (the robot's
+/// base link, an object's frame) in the world, its twist in world axes ([angular; linear], the
+/// linear part the velocity of the frame's origin, as gazebo_ros's model states), and a robot's
+/// joint positions and velocities (Model joint order 1..n; empty for objects).
+struct ModelState {
+  SE3 pose;
+  Vec6 twist = Vec6::Zero();
+  VecX q, v;
+};
+
+/// The pose and twist of a link (Simulator::link_state): in the world, or relative to another
+/// link (its pose in that link's frame, its twist the derivative of that pose: angular and
+/// origin velocity relative to the reference link, in the reference link's axes).
+struct LinkState {
+  SE3 pose;
+  Vec6 twist = Vec6::Zero();
+};
+
+/// A change of the world's objects made ready off the step (Simulator::prepare_spawn,
+/// prepare_delete): the new object list, the free bodies' models, the collision model and the
+/// constraint system are built; Simulator::commit swaps them in between two steps. Opaque.
+struct WorldEdit;
+struct WorldEditDeleter {
+  void operator()(WorldEdit* edit) const;
+};
+using WorldEditPtr = std::unique_ptr<WorldEdit, WorldEditDeleter>;
+
+/// An object from YAML text with the keys of one `objects:` entry of a scene (name, shape, mass,
+/// inertia, pose, twist, mu, restitution, color; scene_objects.cpp); mesh paths relative to
+/// base_dir. `name` not empty: the object's name (the text then needs none). Throws SceneError
+/// naming `source`, the line and the key.
+SceneObject parse_scene_object(const std::string& yaml, const std::string& base_dir,
+                               const std::string& source = "<object>",
+                               const std::string& name = "");
+
+}  // namespace se3

@@ -1,0 +1,570 @@
+// The world interface of the Simulator (world.h, sim.h): models, spawn and delete between steps,
+// model and link states.
+#include "se3_sim/world.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "scene_objects_reader.h"
+#include "se3_sim/constraint.h"
+#include "se3_sim/scene_collision.h"
+#include "se3_sim/sim.h"
+
+namespace se3 {
+
+namespace {
+
+// A position farther than this from the origin is refused (m): beyond it double precision
+// leaves contact and integration no digits to work with.
+constexpr double kMaxPosition = 1e6;
+
+std::string fig(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+void check_pose(const SE3& pose, const std::string& what) {
+  if (!pose.p.allFinite() || !pose.R.allFinite()) {
+    throw WorldError(WorldError::Kind::InvalidPose, what + ".pose is not finite");
+  }
+  if (!is_rotation(pose.R)) {
+    throw WorldError(WorldError::Kind::InvalidPose,
+                     what + ".pose.orientation is not a rotation (unit quaternion)");
+  }
+  if (pose.p.norm() > kMaxPosition) {
+    throw WorldError(WorldError::Kind::InvalidPose,
+                     what + ".pose.position is " + fig(pose.p.norm()) +
+                         " m from the origin (at most " + fig(kMaxPosition) + ")");
+  }
+}
+
+void check_rates(const VecX& v, double max_rate, const std::string& what) {
+  if (!v.allFinite()) throw WorldError(WorldError::Kind::Invalid, what + " is not finite");
+  if (v.size() > 0 && v.cwiseAbs().maxCoeff() > max_rate) {
+    throw WorldError(WorldError::Kind::Invalid,
+                     what + " has a rate of " + fig(v.cwiseAbs().maxCoeff()) + " above the limit " +
+                         fig(max_rate) + " (GuardOptions::max_rate)");
+  }
+}
+
+// The smallest extent of a shape (m), as simulator.cpp's for the tunnelling warning.
+double extent(const Shape& s) {
+  switch (s.type) {
+    case ShapeType::Box:
+      return s.box.minCoeff();
+    case ShapeType::Sphere:
+    case ShapeType::Capsule:
+      return 2 * s.radius;
+    case ShapeType::Cylinder:
+      return std::min(2 * s.radius, s.length);
+    case ShapeType::Mesh:
+      break;
+  }
+  if (!s.mesh || s.mesh->positions.empty()) return 0;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3f& p : s.mesh->positions) {
+    const Vec3 q = p.cast<double>().cwiseProduct(s.scale);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  return (hi - lo).cwiseAbs().minCoeff();
+}
+
+CollisionObject object_collider(const SceneObject& o, int frame) {
+  CollisionObject c;
+  c.name = o.name;
+  c.shape = o.shape;
+  c.group = 1;
+  c.mu = o.mu;
+  c.restitution = o.restitution;
+  if (o.is_static) {
+    c.frame = CollisionObject::kWorld;
+    c.placement = o.pose;
+  } else {
+    c.frame = frame;
+  }
+  return c;
+}
+
+// World axes [R w; R v] of a body-frame twist [w; v] of a frame with rotation R.
+Vec6 to_world(const Mat3& R, const Vec6& t) {
+  Vec6 out;
+  out.head<3>() = R * t.head<3>();
+  out.tail<3>() = R * t.tail<3>();
+  return out;
+}
+
+Vec6 to_body(const Mat3& R, const Vec6& t) {
+  Vec6 out;
+  out.head<3>() = R.transpose() * t.head<3>();
+  out.tail<3>() = R.transpose() * t.tail<3>();
+  return out;
+}
+
+}  // namespace
+
+SceneObject parse_scene_object(const std::string& yaml, const std::string& base_dir,
+                               const std::string& source, const std::string& name) {
+  const SceneReader r(source);
+  SceneReader::Field doc = r.document(yaml);
+  doc.key = "object";
+  SceneObject o = read_scene_object(r, doc, base_dir, name);
+  if (!name.empty()) o.name = o.material.name = name;
+  return o;
+}
+
+struct WorldEdit {
+  std::uint64_t generation = 0;
+  std::string spawned, deleted;  ///< the model the edit adds or removes ("" if none)
+  std::vector<SceneObject> specs;
+  std::vector<Simulator::ObjectBody> bodies;
+  std::vector<const Model*> body_models;
+  std::vector<int> body_from;  ///< per new body: the old body index it continues, or -1
+  std::unique_ptr<CollisionModel> collision;
+  std::unique_ptr<SceneCollision> scene_collision;
+  std::unique_ptr<ConstraintSystem> constraints, constraints_start;
+};
+
+void WorldEditDeleter::operator()(WorldEdit* edit) const {
+  delete edit;
+}
+
+void Simulator::set_robot_name(const std::string& name, const std::string& ns) {
+  if (!name.empty() && object_index(name) >= 0) {
+    throw WorldError(WorldError::Kind::Invalid, "name '" + name + "' is an object's");
+  }
+  for (char c : name) {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == '/' || c == '#') {
+      throw WorldError(WorldError::Kind::Invalid, "name '" + name + "' is not a frame name");
+    }
+  }
+  robot_name_ = name;
+  robot_ns_ = ns;
+}
+
+std::vector<WorldModel> Simulator::world_models() const {
+  std::vector<WorldModel> out;
+  if (!robot_name_.empty()) out.push_back({robot_name_, "robot", robot_ns_, !model_->floating});
+  for (const SceneObject& o : object_specs_) out.push_back({o.name, "object", "", o.is_static});
+  return out;
+}
+
+int Simulator::object_index(const std::string& name) const {
+  for (size_t j = 0; j < object_specs_.size(); ++j) {
+    if (object_specs_[j].name == name) return static_cast<int>(j);
+  }
+  return -1;
+}
+
+int Simulator::body_of(int object) const {
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    if (bodies_[b].index == object) return static_cast<int>(b);
+  }
+  return -1;
+}
+
+void Simulator::check_new_name(const std::string& name) const {
+  using K = WorldError::Kind;
+  if (name.empty()) throw WorldError(K::NameInvalid, "name is empty");
+  for (char c : name) {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == '/' || c == '#' || c == ':') {
+      throw WorldError(K::NameInvalid,
+                       "name '" + name + "' is not a frame name (no spaces, '/', '#' or ':')");
+    }
+  }
+  if (name == robot_name_ || object_index(name) >= 0) {
+    throw WorldError(K::NameInUse, "name '" + name + "' is already a model's");
+  }
+  if (!robot_name_.empty() && model_->link_index(name) >= 0) {
+    throw WorldError(K::NameInUse, "name '" + name + "' is a link of the robot (a TF frame)");
+  }
+  if (name == "ground" || name == "world") {
+    throw WorldError(K::NameInvalid, "name '" + name + "' is reserved");
+  }
+}
+
+WorldEditPtr Simulator::prepare_spawn(const SceneObject& o) const {
+  check_new_name(o.name);
+  const std::string what = "object '" + o.name + "'";
+  check_pose(o.pose, what);
+  if (!o.is_static) {
+    if (!(o.mass > 0) || !std::isfinite(o.mass) || !(o.inertia.m > 0)) {
+      throw WorldError(WorldError::Kind::Invalid, what + ".mass must be positive and finite");
+    }
+    check_rates(o.twist, config_.guard.max_rate, what + ".twist");
+  } else if (!o.twist.isZero()) {
+    throw WorldError(WorldError::Kind::Invalid,
+                     what + ".twist needs a mass (a static object does not move)");
+  }
+  std::vector<SceneObject> specs = object_specs_;
+  specs.push_back(o);
+  WorldEditPtr e = prepare_objects(std::move(specs));
+  e->spawned = o.name;
+  return e;
+}
+
+WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
+  if (!name.empty() && name == robot_name_) {
+    throw WorldError(WorldError::Kind::Invalid,
+                     "name '" + name + "' is the robot's, which cannot be deleted");
+  }
+  const int j = object_index(name);
+  if (j < 0) throw WorldError(WorldError::Kind::NotFound, "name '" + name + "': no such model");
+  std::vector<SceneObject> specs = object_specs_;
+  specs.erase(specs.begin() + j);
+  WorldEditPtr e = prepare_objects(std::move(specs));
+  e->deleted = name;
+  return e;
+}
+
+WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
+  WorldEditPtr e(new WorldEdit);
+  e->generation = world_generation_;
+  const int first_frame = model_->n + 1;
+  std::vector<CollisionObject> colliders;
+  std::vector<int> scene_object, body, object_frame;
+  // The robot's own collision objects stay as they are (their frames do not change).
+  if (scene_collision_) {
+    const std::vector<CollisionObject>& old = scene_collision_->model.objects();
+    for (size_t k = 0; k < old.size(); ++k) {
+      if (scene_collision_->scene_object[k] >= 0 || int(k) == scene_collision_->ground) continue;
+      colliders.push_back(old[k]);
+      scene_object.push_back(-1);
+      body.push_back(scene_collision_->body[k]);
+    }
+  }
+  for (size_t j = 0; j < specs.size(); ++j) {
+    const SceneObject& o = specs[j];
+    const int frame = first_frame + static_cast<int>(e->bodies.size());
+    colliders.push_back(object_collider(o, frame));
+    scene_object.push_back(static_cast<int>(j));
+    body.push_back(-1);
+    object_frame.push_back(o.is_static ? CollisionObject::kWorld : frame);
+    if (o.is_static) continue;
+    ObjectBody b;
+    b.index = static_cast<int>(j);
+    b.model = std::make_unique<Model>();
+    b.model->floating = true;
+    b.model->name = o.name;
+    b.model->start_with_base(o.name, o.inertia);
+    b.model->gravity = model_->gravity;
+    b.model->finalize();
+    try {
+      b.model->validate();
+    } catch (const ModelError&) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       "object '" + o.name +
+                           "'.inertia: a free object needs a mass and a positive-definite "
+                           "inertia (check the shape's size and the mass)");
+    }
+    b.initial = State(*b.model);
+    b.initial.base = o.pose;
+    b.initial.v = o.twist;
+    b.size = extent(o.shape);
+    const int old = object_index(o.name);
+    e->body_from.push_back(old >= 0 ? body_of(old) : -1);
+    e->body_models.push_back(b.model.get());
+    e->bodies.push_back(std::move(b));
+  }
+  // The ground: the scene collision's as it is, or the constraint spec's plane.
+  int ground = -1;
+  if (scene_collision_ && scene_collision_->ground >= 0) {
+    ground = static_cast<int>(colliders.size());
+    colliders.push_back(scene_collision_->model.objects()[scene_collision_->ground]);
+    scene_object.push_back(-1);
+    body.push_back(-1);
+  } else if (!scene_collision_ && spec_.ground) {
+    CollisionObject g;
+    g.name = "ground";
+    g.halfspace = true;
+    g.group = 1;
+    g.mu = spec_.mu;
+    g.restitution = spec_.options.restitution;
+    const Vec3 n = spec_.ground_normal.normalized();
+    Vec3 t1, t2;
+    tangent_basis(n, t1, t2);
+    g.placement.R.col(0) = t1;
+    g.placement.R.col(1) = t2;
+    g.placement.R.col(2) = n;
+    g.placement.p = spec_.ground_offset * n;
+    ground = static_cast<int>(colliders.size());
+    colliders.push_back(g);
+  }
+  const int nb = static_cast<int>(e->bodies.size());
+  try {
+    if (scene_collision_) {
+      e->scene_collision = std::make_unique<SceneCollision>(
+          SceneCollision{CollisionModel(std::move(colliders), scene_collision_->model.options()),
+                         first_frame, nb, std::move(object_frame), std::move(scene_object),
+                         std::move(body), ground, scene_collision_->warnings});
+    } else if (nb > 0) {
+      CollisionOptions copt;
+      copt.margin = spec_.options.margin;
+      e->collision = std::make_unique<CollisionModel>(std::move(colliders), copt);
+    }
+  } catch (const std::invalid_argument& err) {
+    throw WorldError(WorldError::Kind::Invalid, std::string("shape: ") + err.what());
+  }
+  // The constraint system for the new set of free bodies (rebuild_constraints without the
+  // projection: the initial state was projected when the constraints were set).
+  if (!(spec_.empty() && nb == 0 && !scene_collision_)) {
+    e->constraints = std::make_unique<ConstraintSystem>(*model_, spec_);
+    if (nb > 0 || scene_collision_) {
+      e->constraints->set_free_bodies(e->body_models, (scene_collision_ ? 64 : 0) + 16 * nb);
+    }
+    e->constraints->anchor(initial_);
+    e->constraints_start = std::make_unique<ConstraintSystem>(*e->constraints);
+  }
+  e->specs = std::move(specs);
+  return e;
+}
+
+std::string Simulator::commit(WorldEditPtr e) {
+  if (!e) throw WorldError(WorldError::Kind::Invalid, "no edit");
+  if (e->generation != world_generation_) {
+    throw WorldError(WorldError::Kind::Stale,
+                     "the world changed since the edit was prepared; prepare it again");
+  }
+  const size_t nb = e->bodies.size();
+  std::vector<State> states(nb), last_good(nb);
+  for (size_t j = 0; j < nb; ++j) {
+    const int from = e->body_from[j];
+    states[j] = from >= 0 ? body_states_[from] : e->bodies[j].initial;
+    last_good[j] = from >= 0 ? body_last_good_[from] : e->bodies[j].initial;
+  }
+  std::vector<ObjectState> objects(e->specs.size());
+  for (size_t j = 0; j < e->specs.size(); ++j) {
+    const SceneObject& o = e->specs[j];
+    const int old = object_index(o.name);
+    if (old >= 0 && object_specs_[old].is_static == o.is_static) {
+      objects[j] = objects_[old];
+    } else {
+      objects[j].name = o.name;
+      objects[j].is_static = o.is_static;
+      objects[j].pose = o.pose;
+      objects[j].twist = o.is_static ? Vec6::Zero() : o.twist;
+    }
+    if (o.is_static) objects[j].pose = o.pose;
+  }
+  // Nothing below throws: the swap is whole.
+  object_specs_ = std::move(e->specs);
+  objects_ = std::move(objects);
+  bodies_ = std::move(e->bodies);
+  body_models_ = std::move(e->body_models);
+  body_states_ = std::move(states);
+  body_last_good_ = std::move(last_good);
+  body_a_.assign(nb, VecX::Zero(6));
+  if (scene_collision_) {
+    scene_collision_ = std::move(e->scene_collision);
+  } else {
+    collision_ = std::move(e->collision);
+  }
+  constraints_ = std::move(e->constraints);
+  constraints_start_ = std::move(e->constraints_start);
+  frame_poses_.assign(model_->n + 1 + nb, SE3());
+  free_poses_.assign(nb, SE3());
+  collision_data_.contacts.reserve((scene_collision_ ? 256 : 0) + 64 * nb);
+  contacts_fresh_ = false;
+  ++world_generation_;
+  if (!e->spawned.empty()) ++spawned_;
+  if (!e->deleted.empty()) ++deleted_;
+  return interpenetration_report();
+}
+
+std::string Simulator::spawn_object(const SceneObject& object) {
+  return commit(prepare_spawn(object));
+}
+
+void Simulator::delete_model(const std::string& name) {
+  commit(prepare_delete(name));
+}
+
+ModelState Simulator::model_state(const std::string& name) {
+  ModelState s;
+  if (!name.empty() && name == robot_name_) {
+    const int nb = model_->nv_base();
+    s.pose = state_.base;
+    if (nb == 6) s.twist = to_world(state_.base.R, state_.v.head<6>());
+    s.q = state_.q;
+    s.v = state_.v.tail(model_->nv - nb);
+    return s;
+  }
+  const int j = object_index(name);
+  if (j < 0) throw WorldError(WorldError::Kind::NotFound, "name '" + name + "': no such model");
+  s.pose = objects_[j].pose;
+  s.twist = to_world(s.pose.R, objects_[j].twist);
+  return s;
+}
+
+std::string Simulator::set_model_state(const std::string& name, const ModelState& s) {
+  const std::string what = "model '" + name + "' state";
+  check_pose(s.pose, what);
+  if (!s.twist.allFinite())
+    throw WorldError(WorldError::Kind::Invalid, what + ".twist is not finite");
+  check_rates(s.twist, config_.guard.max_rate, what + ".twist");
+  if (!name.empty() && name == robot_name_) {
+    const int nb = model_->nv_base();
+    if (s.q.size() != model_->n) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       what + ".joint positions: " + std::to_string(s.q.size()) +
+                           " given, the robot has " + std::to_string(model_->n));
+    }
+    if (s.v.size() != model_->nv - nb) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       what + ".joint velocities: " + std::to_string(s.v.size()) +
+                           " given, the robot has " + std::to_string(model_->nv - nb));
+    }
+    if (!s.q.allFinite())
+      throw WorldError(WorldError::Kind::Invalid, what + ".joint positions are not finite");
+    check_rates(s.v, config_.guard.max_rate, what + ".joint velocities");
+    if (nb == 0 && !s.twist.isZero()) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       what + ".twist must be zero: the robot's base is fixed");
+    }
+    State x = state_;
+    x.base = s.pose;
+    x.q = s.q;
+    if (nb == 6) x.v.head<6>() = to_body(s.pose.R, s.twist);
+    x.v.tail(model_->nv - nb) = s.v;
+    set_state(x);
+    contacts_fresh_ = false;
+    return interpenetration_report();
+  }
+  const int j = object_index(name);
+  if (j < 0) throw WorldError(WorldError::Kind::NotFound, "name '" + name + "': no such model");
+  if (s.q.size() != 0 || s.v.size() != 0) {
+    throw WorldError(WorldError::Kind::Invalid, what + ": an object has no joints");
+  }
+  if (object_specs_[j].is_static) {
+    if (!s.twist.isZero()) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       what + ".twist must be zero: the object is static");
+    }
+    std::vector<SceneObject> specs = object_specs_;
+    specs[j].pose = s.pose;
+    return commit(prepare_objects(std::move(specs)));
+  }
+  const int b = body_of(j);
+  State& x = body_states_[b];
+  x.base = s.pose;
+  x.v = to_body(s.pose.R, s.twist);
+  body_last_good_[b] = x;
+  objects_[j].pose = x.base;
+  objects_[j].twist = x.v;
+  contacts_fresh_ = false;
+  return interpenetration_report();
+}
+
+std::vector<std::string> Simulator::link_names() const {
+  std::vector<std::string> out;
+  if (!robot_name_.empty()) {
+    for (const LinkFrame& L : model_->links) out.push_back(L.name);
+  }
+  for (const SceneObject& o : object_specs_) out.push_back(o.name);
+  return out;
+}
+
+LinkState Simulator::link_state(const std::string& link, const std::string& reference) {
+  // Resolves MODEL::LINK or LINK into a world pose and world-axes twist.
+  auto world = [&](const std::string& full, const char* field) {
+    std::string model, name = full;
+    const auto sep = full.find("::");
+    if (sep != std::string::npos) {
+      model = full.substr(0, sep);
+      name = full.substr(sep + 2);
+    }
+    if (!robot_name_.empty() && (model.empty() || model == robot_name_)) {
+      const int k = model_->link_index(name);
+      if (k >= 0) {
+        forward_kinematics(*model_, diag_, state_.base, state_.q, state_.v);
+        const LinkFrame& L = model_->links[k];
+        const SE3& B = diag_.oMb[L.body];
+        const Vec6& V = diag_.V[L.body];
+        LinkState s;
+        s.pose = B * L.offset;
+        s.twist.head<3>() = B.R * V.head<3>();
+        s.twist.tail<3>() = B.R * (V.tail<3>() + V.head<3>().cross(L.offset.p));
+        return s;
+      }
+    }
+    const int j = object_index(name);
+    if (j >= 0 && (model.empty() || model == name)) {
+      LinkState s;
+      s.pose = objects_[j].pose;
+      s.twist = to_world(s.pose.R, objects_[j].twist);
+      return s;
+    }
+    throw WorldError(WorldError::Kind::NotFound,
+                     std::string(field) + " '" + full + "': no such link");
+  };
+  const LinkState a = world(link, "link");
+  if (reference.empty() || reference == "world") return a;
+  const LinkState r = world(reference, "reference");
+  LinkState s;
+  s.pose = r.pose.inverse() * a.pose;
+  const Mat3 Rt = r.pose.R.transpose();
+  s.twist.head<3>() = Rt * (a.twist.head<3>() - r.twist.head<3>());
+  s.twist.tail<3>() =
+      Rt * (a.twist.tail<3>() - r.twist.tail<3>() - r.twist.head<3>().cross(a.pose.p - r.pose.p));
+  return s;
+}
+
+std::string Simulator::set_link_state(const std::string& link, const LinkState& s) {
+  std::string model, name = link;
+  const auto sep = link.find("::");
+  if (sep != std::string::npos) {
+    model = link.substr(0, sep);
+    name = link.substr(sep + 2);
+  }
+  const int j = object_index(name);
+  if (j >= 0 && (model.empty() || model == name)) {
+    ModelState m;
+    m.pose = s.pose;
+    m.twist = s.twist;
+    return set_model_state(name, m);
+  }
+  if (!robot_name_.empty() && (model.empty() || model == robot_name_)) {
+    const int k = model_->link_index(name);
+    if (k >= 0) {
+      const LinkFrame& L = model_->links[k];
+      if (L.body != 0 || !L.offset.R.isIdentity(0) || !L.offset.p.isZero(0)) {
+        throw WorldError(WorldError::Kind::Invalid,
+                         "link '" + link +
+                             "' is not the robot's root link: its pose follows from the "
+                             "joints (set the model state instead)");
+      }
+      ModelState m = model_state(robot_name_);
+      m.pose = s.pose;
+      m.twist = s.twist;
+      return set_model_state(robot_name_, m);
+    }
+  }
+  throw WorldError(WorldError::Kind::NotFound, "link '" + link + "': no such link");
+}
+
+std::string Simulator::interpenetration_report() {
+  if (!collider()) return "";
+  collide_objects();
+  const Contact* deepest = nullptr;
+  for (const Contact& c : collision_data_.contacts) {
+    if (c.depth > 0 && (!deepest || c.depth > deepest->depth)) deepest = &c;
+  }
+  if (!deepest) return "";
+  const std::vector<CollisionObject>& objects = collider()->objects();
+  return "'" + objects[deepest->a].name + "' and '" + objects[deepest->b].name +
+         "' interpenetrate by " + fig(deepest->depth) + " m";
+}
+
+void Simulator::reset_world() {
+  const double t = time_;
+  const std::uint64_t n = steps_;
+  reset();
+  time_ = last_checked_time_ = t;
+  steps_ = last_checked_steps_ = n;
+}
+
+}  // namespace se3
