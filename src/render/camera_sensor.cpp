@@ -1,0 +1,135 @@
+// Camera sensor: the rasterizer's frame turned into rgb8, REP 118 depth and an organized cloud.
+#include "se3_sim/render/camera_sensor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+namespace se3 {
+namespace render {
+
+namespace {
+
+CameraSensorSpec clamped(CameraSensorSpec s) {
+  s.width = std::clamp(s.width, 1, 8192);
+  s.height = std::clamp(s.height, 1, 8192);
+  if (!(s.hfov > 0 && s.hfov < M_PI)) s.hfov = 1.047;
+  if (!(s.near > 0) || !std::isfinite(s.near)) s.near = 0.05;
+  if (!(s.far > s.near) || !std::isfinite(s.far)) s.far = std::max(10.0, 2 * s.near);
+  return s;
+}
+
+}  // namespace
+
+CameraIntrinsics camera_intrinsics(const CameraSensorSpec& spec) {
+  CameraIntrinsics c;
+  c.width = spec.width;
+  c.height = spec.height;
+  c.fx = c.fy = 0.5 * spec.width / std::tan(0.5 * spec.hfov);
+  c.cx = 0.5 * (spec.width - 1);
+  c.cy = 0.5 * (spec.height - 1);
+  c.K = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
+  c.P = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
+  return c;
+}
+
+Mat3 optical_in_body() {
+  Mat3 R;
+  R << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return R;
+}
+
+bool check_camera_spec(const CameraSensorSpec& s, std::string* error) {
+  auto fail = [&](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  if (s.width < 1 || s.width > 8192) return fail("width must be in [1, 8192]");
+  if (s.height < 1 || s.height > 8192) return fail("height must be in [1, 8192]");
+  if (!(s.hfov > 0 && s.hfov < M_PI)) return fail("horizontal_fov must be in (0, pi) rad");
+  if (!(s.near > 0) || !std::isfinite(s.near)) return fail("near must be > 0 (m)");
+  if (!(s.far > s.near) || !std::isfinite(s.far)) return fail("far must be finite and > near");
+  return true;
+}
+
+CameraSensor::CameraSensor(const CameraSensorSpec& spec)
+    : spec_(clamped(spec)), intr_(camera_intrinsics(spec_)) {
+  Camera cam;
+  cam.width = spec_.width;
+  cam.height = spec_.height;
+  cam.focal_px = intr_.fx;
+  cam.near = spec_.near;
+  renderer_.set_camera(cam);
+  renderer_.style().overlay = false;
+  renderer_.style().frames = false;
+  renderer_.style().threads = 1;
+  const std::size_t n = std::size_t(spec_.width) * spec_.height;
+  rgb_.assign(3 * n, 0);
+  if (spec_.depth) {
+    depth_.assign(n, std::numeric_limits<float>::quiet_NaN());
+    cloud_.assign(4 * n, std::numeric_limits<float>::quiet_NaN());
+  }
+}
+
+void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
+                          const std::vector<Marker>& markers) {
+  Camera cam = renderer_.camera();
+  cam.eye = oMc.p;
+  cam.target = oMc.p + oMc.R.col(2);
+  cam.up = -oMc.R.col(1);
+  renderer_.set_camera(cam);
+  renderer_.render(oMb, markers);
+  renderer_.copy_rgb8(rgb_.data());
+  if (!spec_.depth) return;
+
+  const Camera& c = renderer_.camera();
+  const Framebuffer& fb = renderer_.framebuffer();
+  const int W = spec_.width, H = spec_.height;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const double near = spec_.near, far = spec_.far;
+  // Ground: the ray through (a, b, 1) (optical) meets z = 0 at depth -eye_z / (g . (a, b, 1)),
+  // g the world z axis in optical coordinates.
+  const Vec3 g = c.R_wc.row(2).transpose();
+  const double h = c.eye.z();
+  const bool ground = spec_.ground && std::isfinite(h);
+  const double ifx = 1.0 / intr_.fx, ify = 1.0 / intr_.fy;
+  const float* zbuf = fb.depth();
+  const uint32_t* color = fb.color();
+  for (int j = 0; j < H; ++j) {
+    const double b = (j - intr_.cy) * ify;
+    const double gb = g.y() * b + g.z();
+    const std::size_t row = std::size_t(j) * W;
+    for (int i = 0; i < W; ++i) {
+      const std::size_t k = row + i;
+      const double a = (i - intr_.cx) * ifx;
+      const float iz = zbuf[k];
+      double z;
+      if (iz > 0) {
+        z = 1.0 / double(iz);
+      } else if (ground) {
+        const double den = g.x() * a + gb;
+        z = den != 0 ? -h / den : -1.0;
+      } else {
+        z = -1.0;
+      }
+      float* p = &cloud_[4 * k];
+      if (z >= near && z <= far) {
+        depth_[k] = float(z);
+        p[0] = float(a * z);
+        p[1] = float(b * z);
+        p[2] = float(z);
+      } else {
+        depth_[k] = nan;
+        p[0] = p[1] = p[2] = nan;
+      }
+      std::memcpy(&p[3], &color[k], sizeof(float));
+    }
+  }
+}
+
+}  // namespace render
+}  // namespace se3
