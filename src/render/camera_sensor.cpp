@@ -72,6 +72,8 @@ CameraSensor::CameraSensor(const CameraSensorSpec& spec)
   if (spec_.depth) {
     depth_.assign(n, std::numeric_limits<float>::quiet_NaN());
     cloud_.assign(4 * n, std::numeric_limits<float>::quiet_NaN());
+    columns_.resize(spec_.width);
+    for (int i = 0; i < spec_.width; ++i) columns_[i] = float((i - intr_.cx) / intr_.fx);
   }
 }
 
@@ -90,43 +92,38 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
   const Framebuffer& fb = renderer_.framebuffer();
   const int W = spec_.width, H = spec_.height;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const double near = spec_.near, far = spec_.far;
+  const float near = float(spec_.near), far = float(spec_.far);
   // Ground: the ray through (a, b, 1) (optical) meets z = 0 at depth -eye_z / (g . (a, b, 1)),
-  // g the world z axis in optical coordinates.
+  // g the world z axis in optical coordinates; no ground: a negative depth (never valid).
   const Vec3 g = c.R_wc.row(2).transpose();
-  const double h = c.eye.z();
-  const bool ground = spec_.ground && std::isfinite(h);
-  const double ifx = 1.0 / intr_.fx, ify = 1.0 / intr_.fy;
+  const bool ground = spec_.ground && std::isfinite(c.eye.z());
+  const float h = ground ? float(c.eye.z()) : 0.0f;
+  const float gx = ground ? float(g.x()) : 0.0f;
   const float* zbuf = fb.depth();
   const uint32_t* color = fb.color();
+  const float* a = columns_.data();
+  // Float throughout and no branches in the row loop (the compiler vectorizes it): 1 / iz in
+  // float is within 6e-8 relative of the depth buffer's value.
   for (int j = 0; j < H; ++j) {
-    const double b = (j - intr_.cy) * ify;
-    const double gb = g.y() * b + g.z();
+    const float b = float((j - intr_.cy) / intr_.fy);
+    const float gb = ground ? float(g.y() * b + g.z()) : 1.0f;
     const std::size_t row = std::size_t(j) * W;
+    const float* zr = zbuf + row;
+    float* dr = depth_.data() + row;
+    float* pr = cloud_.data() + 4 * row;
+    const uint32_t* cr = color + row;
     for (int i = 0; i < W; ++i) {
-      const std::size_t k = row + i;
-      const double a = (i - intr_.cx) * ifx;
-      const float iz = zbuf[k];
-      double z;
-      if (iz > 0) {
-        z = 1.0 / double(iz);
-      } else if (ground) {
-        const double den = g.x() * a + gb;
-        z = den != 0 ? -h / den : -1.0;
-      } else {
-        z = -1.0;
-      }
-      float* p = &cloud_[4 * k];
-      if (z >= near && z <= far) {
-        depth_[k] = float(z);
-        p[0] = float(a * z);
-        p[1] = float(b * z);
-        p[2] = float(z);
-      } else {
-        depth_[k] = nan;
-        p[0] = p[1] = p[2] = nan;
-      }
-      std::memcpy(&p[3], &color[k], sizeof(float));
+      const float iz = zr[i];
+      const float den = gx * a[i] + gb;
+      const float zg = -h / den;  // no ground: -0; parallel: +-Inf or NaN, never in the clip
+      const float z = iz > 0.0f ? 1.0f / iz : zg;
+      const bool ok = z >= near && z <= far;
+      const float zz = ok ? z : nan;
+      dr[i] = zz;
+      pr[4 * i + 0] = a[i] * zz;
+      pr[4 * i + 1] = b * zz;
+      pr[4 * i + 2] = zz;
+      std::memcpy(&pr[4 * i + 3], &cr[i], sizeof(float));
     }
   }
 }

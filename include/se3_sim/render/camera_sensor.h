@@ -94,6 +94,7 @@ class CameraSensor {
   Renderer renderer_;
   std::vector<uint8_t> rgb_;
   std::vector<float> depth_, cloud_;
+  std::vector<float> columns_;  ///< (i - cx) / fx per column
 };
 
 }  // namespace render
