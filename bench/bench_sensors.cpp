@@ -7,6 +7,9 @@
 //                                       the collision hulls, table, box and ground)
 //   Scan/depth_sweep/<N>                the alternative: N samples rendered as three 1-row depth
 //                                       cameras of 120 deg each (as gazebo's gpu_ray renders)
+//   Depth/640x480/llvmpipe              Mesa's llvmpipe (OSMesa, LP_NUM_THREADS=1) drawing the same
+//                                       full meshes and reading the depth back as metres (where
+//                                       built with OSMesa; as bench_render's RGB comparison)
 //
 //   bench_sensors [google-benchmark flags]     medians of 9 repetitions
 //   bench_sensors --frames=N                   N camera frames at 640x480 only (for callgrind:
@@ -16,6 +19,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -23,6 +27,13 @@
 
 #include "se3_sim/laser.h"
 #include "se3_sim/render/camera_sensor.h"
+
+#if SE3_SIM_HAVE_OSMESA
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <GL/osmesa.h>
+#endif
 
 namespace {
 
@@ -163,6 +174,107 @@ void BM_ScanDepthSweep(benchmark::State& state, int samples) {
   }
 }
 
+#if SE3_SIM_HAVE_OSMESA
+// The same depth frame through llvmpipe: meshes in vertex buffers once, no lighting (depth
+// only), glReadPixels of the 24-bit depth as floats, turned into metres along the optical axis
+// (NaN beyond the far plane), and the depth of ours compared pixel by pixel.
+void BM_LlvmpipeDepth(benchmark::State& state, int W, int H) {
+  const World& w = world();
+  render::CameraSensorSpec spec;
+  spec.width = W;
+  spec.height = H;
+  spec.far = 6;
+  spec.ground = false;
+  render::CameraSensor ours(spec);
+  render::DrawOptions opt;
+  opt.simplify_error = 0;
+  ours.set_model(w.model, w.geometry, opt);
+  ours.render(w.camera, w.oMb);
+  std::vector<uint8_t> rgba(std::size_t(W) * H * 4);
+  OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
+  if (!ctx || !OSMesaMakeCurrent(ctx, rgba.data(), GL_UNSIGNED_BYTE, W, H)) {
+    state.SkipWithError("OSMesa context failed");
+    return;
+  }
+  auto gen = reinterpret_cast<PFNGLGENBUFFERSPROC>(OSMesaGetProcAddress("glGenBuffers"));
+  auto bind = reinterpret_cast<PFNGLBINDBUFFERPROC>(OSMesaGetProcAddress("glBindBuffer"));
+  auto data = reinterpret_cast<PFNGLBUFFERDATAPROC>(OSMesaGetProcAddress("glBufferData"));
+  const auto& items = ours.renderer().items();
+  std::vector<GLuint> vbo(2 * items.size());
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const render::RenderMesh& m = *items[i].mesh;
+    std::vector<float> xyz(3 * m.vertex_count());
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+      xyz[3 * v] = m.px[v];
+      xyz[3 * v + 1] = m.py[v];
+      xyz[3 * v + 2] = m.pz[v];
+    }
+    gen(2, &vbo[2 * i]);
+    bind(GL_ARRAY_BUFFER, vbo[2 * i]);
+    data(GL_ARRAY_BUFFER, GLsizeiptr(4 * xyz.size()), xyz.data(), GL_STATIC_DRAW);
+    bind(GL_ELEMENT_ARRAY_BUFFER, vbo[2 * i + 1]);
+    data(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(4 * m.indices.size()), m.indices.data(),
+         GL_STATIC_DRAW);
+  }
+  state.SetLabel(reinterpret_cast<const char*>(glGetString(GL_RENDERER)));
+  const render::Camera& c = ours.renderer().camera();
+  const double n = spec.near, f = spec.far;
+  glViewport(0, 0, W, H);
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  glFrustum(-c.cx() * n / c.focal_px, (W - c.cx()) * n / c.focal_px, -(H - c.cy()) * n / c.focal_px,
+            c.cy() * n / c.focal_px, n, f);
+  Mat4 flip = Mat4::Identity();
+  flip(1, 1) = -1;
+  flip(2, 2) = -1;
+  const Mat4 view = flip * c.T_cw;
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  std::vector<float> zbuf(std::size_t(W) * H), depth(zbuf.size());
+  GLdouble mv[16];
+  for (auto _ : state) {
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glMatrixMode(GL_MODELVIEW);
+    glEnableClientState(GL_VERTEX_ARRAY);
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const Mat4 M = view * (w.oMb[items[i].body] * items[i].local).matrix();
+      for (int col = 0; col < 4; ++col)
+        for (int r = 0; r < 4; ++r) mv[4 * col + r] = M(r, col);
+      glLoadMatrixd(mv);
+      bind(GL_ARRAY_BUFFER, vbo[2 * i]);
+      bind(GL_ELEMENT_ARRAY_BUFFER, vbo[2 * i + 1]);
+      glVertexPointer(3, GL_FLOAT, 12, nullptr);
+      glDrawElements(GL_TRIANGLES, GLsizei(items[i].mesh->indices.size()), GL_UNSIGNED_INT,
+                     nullptr);
+    }
+    glReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, zbuf.data());
+    for (int y = 0; y < H; ++y) {  // rows bottom up; window depth d -> z
+      const float* src = &zbuf[std::size_t(H - 1 - y) * W];
+      float* dst = &depth[std::size_t(y) * W];
+      for (int x = 0; x < W; ++x) {
+        const double d = src[x];
+        dst[x] = d < 1.0 ? float(n * f / (f - d * (f - n))) : NAN;
+      }
+    }
+    benchmark::DoNotOptimize(depth.data());
+  }
+  // Agreement with ours: the pixels either sees (iou) and, where both do, the share within
+  // 1e-3 relative (the rest are silhouette pixels where one sees an edge, the other past it).
+  std::size_t both = 0, either = 0, close = 0;
+  for (std::size_t k = 0; k < depth.size(); ++k) {
+    const float a = ours.depth()[k], b = depth[k];
+    either += std::isfinite(a) || std::isfinite(b);
+    if (std::isfinite(a) && std::isfinite(b)) {
+      ++both;
+      close += std::abs(a - b) <= 1e-3f * a;
+    }
+  }
+  state.counters["iou"] = either ? double(both) / double(either) : 1.0;
+  state.counters["within_1e-3"] = both ? double(close) / double(both) : 1.0;
+  OSMesaDestroyContext(ctx);
+}
+#endif
+
 int frames_only(int n) {
   const World& w = world();
   render::CameraSensorSpec spec;
@@ -202,6 +314,11 @@ int main(int argc, char** argv) {
     reg(benchmark::RegisterBenchmark((base + "/rgb_only").c_str(), BM_Camera, size.first,
                                      size.second, true, false));
   }
+#if SE3_SIM_HAVE_OSMESA
+  setenv("LP_NUM_THREADS", "1", 1);
+  reg(benchmark::RegisterBenchmark("Depth/640x480/llvmpipe", BM_LlvmpipeDepth, 640, 480));
+  reg(benchmark::RegisterBenchmark("Depth/1280x1024/llvmpipe", BM_LlvmpipeDepth, 1280, 1024));
+#endif
   reg(benchmark::RegisterBenchmark("Scan/raycast/720", BM_ScanRaycast, 720));
   reg(benchmark::RegisterBenchmark("Scan/depth_sweep/720", BM_ScanDepthSweep, 720));
   int n = int(rest.size());
