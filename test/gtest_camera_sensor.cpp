@@ -114,6 +114,24 @@ TEST(CameraSensor, DepthOfABoxFaceSkyNaNAndCloudOnThePlane) {
   }
   EXPECT_GT(face, 3000);
   EXPECT_GT(sky, 30000);
+  // Every pixel, the SIMD columns and the scalar remainder alike (321 = 4 * 80 + 1), is the
+  // depth buffer's 1 / iz and its ray's point, bit for bit.
+  const float* zbuf = cam.renderer().framebuffer().depth();
+  for (int j = 0; j < H; ++j) {
+    const float b = float((j - c.cy) / c.fy);
+    for (int i = 0; i < W; ++i) {
+      const std::size_t k = std::size_t(j) * W + i;
+      const float a = float((i - c.cx) / c.fx);
+      const float d = cam.depth()[k];
+      if (zbuf[k] > 0) {
+        ASSERT_EQ(d, 1.0f / zbuf[k]) << i << " " << j;
+        ASSERT_EQ(cam.cloud()[4 * k], a * d) << i << " " << j;
+        ASSERT_EQ(cam.cloud()[4 * k + 1], b * d) << i << " " << j;
+      } else {
+        ASSERT_TRUE(std::isnan(d)) << i << " " << j;
+      }
+    }
+  }
   // The centre pixel is (0, 0, d) in the optical frame.
   const std::size_t centre = std::size_t(120) * W + 160;
   EXPECT_EQ(cam.cloud()[4 * centre + 0], 0.0f);

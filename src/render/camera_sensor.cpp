@@ -7,6 +7,11 @@
 #include <limits>
 #include <string>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
+
 namespace se3 {
 namespace render {
 
@@ -112,7 +117,32 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
     float* dr = depth_.data() + row;
     float* pr = cloud_.data() + 4 * row;
     const uint32_t* cr = color + row;
-    for (int i = 0; i < W; ++i) {
+    int i = 0;
+#if defined(__SSE2__)
+    // Four pixels at a time, the same float operations as the loop below (the same bits); the
+    // cloud's four fields of four pixels by one transpose.
+    const __m128 vnan = _mm_set1_ps(nan), vnear = _mm_set1_ps(near), vfar = _mm_set1_ps(far);
+    const __m128 vzero = _mm_setzero_ps(), vone = _mm_set1_ps(1.0f), vnh = _mm_set1_ps(-h);
+    const __m128 vgx = _mm_set1_ps(gx), vgb = _mm_set1_ps(gb), vb = _mm_set1_ps(b);
+    for (; i + 4 <= W; i += 4) {
+      const __m128 iz = _mm_loadu_ps(zr + i);
+      const __m128 va = _mm_loadu_ps(a + i);
+      const __m128 zg = _mm_div_ps(vnh, _mm_add_ps(_mm_mul_ps(vgx, va), vgb));
+      const __m128 hit = _mm_cmpgt_ps(iz, vzero);
+      const __m128 z = _mm_or_ps(_mm_and_ps(hit, _mm_div_ps(vone, iz)), _mm_andnot_ps(hit, zg));
+      const __m128 ok = _mm_and_ps(_mm_cmpge_ps(z, vnear), _mm_cmple_ps(z, vfar));
+      __m128 zz = _mm_or_ps(_mm_and_ps(ok, z), _mm_andnot_ps(ok, vnan));
+      _mm_storeu_ps(dr + i, zz);
+      __m128 x = _mm_mul_ps(va, zz), y = _mm_mul_ps(vb, zz);
+      __m128 c = _mm_castsi128_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(cr + i)));
+      _MM_TRANSPOSE4_PS(x, y, zz, c);
+      _mm_storeu_ps(pr + 4 * i, x);
+      _mm_storeu_ps(pr + 4 * i + 4, y);
+      _mm_storeu_ps(pr + 4 * i + 8, zz);
+      _mm_storeu_ps(pr + 4 * i + 12, c);
+    }
+#endif
+    for (; i < W; ++i) {
       const float iz = zr[i];
       const float den = gx * a[i] + gb;
       const float zg = -h / den;  // no ground: -0; parallel: +-Inf or NaN, never in the clip
