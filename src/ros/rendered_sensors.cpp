@@ -323,11 +323,7 @@ void RenderedSensors::after_step(se3::Simulator& sim) {
   for (const Impl::Sensor& s : I.sensors) any = any || k % std::uint64_t(s.period) == 0;
   if (!any) return;
   std::unique_lock<std::mutex> lock(I.mu);
-  if (I.wait) {
-    I.cv.wait(lock, [&] { return !I.pending.full; });
-  } else if (I.pending.full) {
-    ++I.dropped;
-  }
+  if (I.wait) I.cv.wait(lock, [&] { return !I.pending.full; });
   sim.link_poses(I.links);  // computes body_poses() too
   const std::vector<se3::SE3>& oMb = sim.body_poses();
   Impl::Frame& f = I.pending;
@@ -336,9 +332,12 @@ void RenderedSensors::after_step(se3::Simulator& sim) {
   for (std::size_t j = 0; j < objs.size() && I.nbodies + j < f.poses.size(); ++j) {
     f.poses[I.nbodies + j] = objs[j].pose;
   }
+  // A frame not yet taken is replaced whole: its sensors show this state only if due now (a
+  // stamp stays on its sensor's rate), the others lose that frame.
   for (std::size_t i = 0; i < I.sensors.size(); ++i) {
     const bool due = k % std::uint64_t(I.sensors[i].period) == 0;
-    f.due[i] = f.full ? char(f.due[i] || due) : char(due);
+    if (f.full && f.due[i]) ++I.dropped;
+    f.due[i] = char(due);
   }
   f.time = sim.time();
   f.full = true;

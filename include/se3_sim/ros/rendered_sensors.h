@@ -6,9 +6,10 @@
 // every step), after_step() copies the bodies' and objects' poses and the simulated time under
 // the simulator's lock (no allocation) and wakes the thread, which renders (render/
 // camera_sensor.h) or casts (laser.h) and publishes, stamped with that time. Free running, a
-// frame not yet taken when the next one is due is replaced (the newest state wins; counted in
-// dropped()); with `wait` (lockstep) after_step() waits for the thread to take the previous
-// one, so that every due frame is published and the same commands give the same messages.
+// frame not yet taken when the next one is due is replaced (the newest state wins; the sensors
+// it carried lose that frame, counted in dropped(), so that every stamp stays on its sensor's
+// rate); with `wait` (lockstep) after_step() waits for the thread to take the previous one, so
+// that every due frame is published and the same commands give the same messages.
 #pragma once
 
 #include <geometry_msgs/TransformStamped.h>
@@ -42,7 +43,7 @@ class RenderedSensors {
   void after_step(se3::Simulator& sim);
   /// Waits until every frame handed over has been published.
   void flush();
-  /// Frames replaced before the thread took them.
+  /// Sensor frames replaced before the thread took them.
   long dropped() const;
 
  private:
