@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <new>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "se3_sim/render.h"
+#include "se3_sim/render/camera_sensor.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."
@@ -205,6 +207,42 @@ TEST(RenderAlloc, FramesWithOverlayMarkersAndThreadsAllocateNothing) {
     }
     EXPECT_GT(r.last_triangles(), 10000u);
   }
+}
+
+// A depth camera on the Panda's hand (issue 38): rgb8, depth and the cloud of each frame from
+// buffers allocated once, while the camera moves with the hand.
+TEST(RenderAlloc, CameraSensorFramesAllocateNothing) {
+  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const Model m = model_from_urdf_file(urdf);
+  GeometryOptions go;
+  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.use_ros_package_path = false;
+  const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
+  Data d(m);
+  std::vector<Marker> objects(1);
+  objects[0].type = Marker::Type::Box;
+  objects[0].a = Vec3(0.6, 0, 0.025);
+  objects[0].size3 = Vec3(0.6, 1.2, 0.05);
+  CameraSensorSpec spec;
+  spec.width = 320;
+  spec.height = 240;
+  CameraSensor cam(spec);
+  cam.set_model(m, g);
+  VecX q = VecX::Zero(m.n);
+  forward_kinematics(m, d, SE3(), q);
+  const SE3 eye(Mat3::Identity(), Vec3(1.5, 0, 0.8));
+  const Mat3 look = Eigen::AngleAxisd(M_PI, Vec3::UnitZ()).toRotationMatrix() *
+                    Eigen::AngleAxisd(0.4, Vec3::UnitY()).toRotationMatrix();
+  cam.render(SE3(look * optical_in_body(), eye.p), d.oMb, objects);
+  for (int k = 0; k < 4; ++k) {
+    q.setConstant(0.1 * k);
+    forward_kinematics(m, d, SE3(), q);
+    const SE3 moved(look * optical_in_body(), eye.p + Vec3(0, 0.05 * k, 0));
+    EXPECT_EQ(allocations_of([&] { cam.render(moved, d.oMb, objects); }), 0) << "frame " << k;
+  }
+  int hits = 0;
+  for (float z : cam.depth()) hits += std::isfinite(z);
+  EXPECT_GT(hits, 1000);
 }
 
 int main(int argc, char** argv) {

@@ -262,8 +262,8 @@ TEST(Sensors, SceneKeysAreChecked) {
       << error_of("sensors:\n  - {name: a, type: imu, lnk: x}\n");
   EXPECT_NE(error_of("sensors:\n  - {name: a, type: imu, lnk: x}\n").find("lnk"),
             std::string::npos);
-  const std::string cam = error_of("sensors:\n  - {name: c, type: camera, link: x}\n");
-  EXPECT_NE(cam.find("'camera' is not supported yet"), std::string::npos) << cam;
+  const std::string gps = error_of("sensors:\n  - {name: c, type: gps, link: x}\n");
+  EXPECT_NE(gps.find("unknown sensor type 'gps'"), std::string::npos) << gps;
   EXPECT_NE(error_of("sensors:\n  - {name: f, type: force_torque, link: x}\n").find("joint"),
             std::string::npos);
   EXPECT_NE(error_of("sensors:\n  - {name: i, type: imu}\n").find("needs link"), std::string::npos);
@@ -320,7 +320,7 @@ TEST(Sensors, UrdfGazeboTagsAsInTheTutorials) {
       </plugin>
       <pose>0 0 0.1 0 0 0</pose>
     </sensor>
-    <sensor name="cam" type="camera"/>
+    <sensor name="sonar" type="sonar"/>
   </gazebo>
   <gazebo reference="tool">
     <sensor name="tool_contact" type="contact">
@@ -362,8 +362,176 @@ TEST(Sensors, UrdfGazeboTagsAsInTheTutorials) {
   EXPECT_EQ(s[2].topic, "ft_sensor_topic");
   EXPECT_EQ(s[2].rate, 100);
   ASSERT_EQ(warnings.size(), 2u);
-  EXPECT_NE(warnings[0].find("'cam' of type 'camera'"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("'sonar' of type 'sonar'"), std::string::npos) << warnings[0];
   EXPECT_NE(warnings[1].find("libgazebo_ros_p3d.so"), std::string::npos) << warnings[1];
+}
+
+// Cameras and lasers in a scene (issue 38): their keys, checked as the others are.
+TEST(Sensors, CameraAndRaySceneKeys) {
+  const Scene s = parse_scene(
+      "sensors:\n"
+      "  - {name: cam, type: depth_camera, link: world, rate: 30, width: 320, height: 240,\n"
+      "     horizontal_fov: 1.2, near: 0.1, far: 8, pose: {position: [1, 0, 1]}}\n"
+      "  - {name: eye, type: camera, link: a}\n"
+      "  - {name: scan, type: ray, link: a, samples: 360, min_angle: -1.5, max_angle: 1.5,\n"
+      "     range_min: 0.2, range_max: 20, range_resolution: 0.005, topic: /scan}\n",
+      kScenes, "s.yaml");
+  ASSERT_EQ(s.sensors.size(), 3u);
+  EXPECT_EQ(s.sensors[0].type, SensorType::DepthCamera);
+  EXPECT_EQ(s.sensors[0].link, "world");
+  EXPECT_EQ(s.sensors[0].camera.width, 320);
+  EXPECT_EQ(s.sensors[0].camera.height, 240);
+  EXPECT_EQ(s.sensors[0].camera.hfov, 1.2);
+  EXPECT_EQ(s.sensors[0].camera.near, 0.1);
+  EXPECT_EQ(s.sensors[0].camera.far, 8);
+  EXPECT_EQ(s.sensors[0].rate, 30);
+  EXPECT_EQ(s.sensors[1].type, SensorType::Camera);
+  EXPECT_EQ(s.sensors[1].camera.width, 640);  // Gazebo's defaults
+  EXPECT_EQ(s.sensors[2].type, SensorType::Ray);
+  EXPECT_EQ(s.sensors[2].ray.samples, 360);
+  EXPECT_EQ(s.sensors[2].ray.angle_min, -1.5);
+  EXPECT_EQ(s.sensors[2].ray.angle_max, 1.5);
+  EXPECT_EQ(s.sensors[2].ray.range_min, 0.2);
+  EXPECT_EQ(s.sensors[2].ray.range_max, 20);
+  EXPECT_EQ(s.sensors[2].ray.resolution, 0.005);
+  EXPECT_EQ(s.sensors[2].topic, "/scan");
+  auto expect = [](const std::string& yaml, const std::string& what) {
+    const std::string e = error_of(yaml);
+    EXPECT_EQ(e.rfind("s.yaml:", 0), 0u) << e;
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+  };
+  expect("sensors:\n  - {name: c, type: camera, link: a, width: 0}\n", "width");
+  expect("sensors:\n  - {name: c, type: camera, link: a, width: 1.5}\n", "width");
+  expect("sensors:\n  - {name: c, type: camera, link: a, horizontal_fov: 4}\n", "horizontal_fov");
+  expect("sensors:\n  - {name: c, type: camera, link: a, near: 2, far: 1}\n",
+         "far must be greater than near");
+  expect("sensors:\n  - {name: c, type: camera, link: a, samples: 10}\n",
+         "'samples' is a ray sensor's key");
+  expect("sensors:\n  - {name: c, type: imu, link: a, width: 10}\n", "'width' is a camera's key");
+  expect("sensors:\n  - {name: r, type: ray, link: a, samples: 0}\n", "samples");
+  expect("sensors:\n  - {name: r, type: ray, link: a, range_min: 5, range_max: 1}\n",
+         "range_max must be greater than range_min");
+  expect("sensors:\n  - {name: r, type: ray, link: a, min_angle: 1, max_angle: 0}\n",
+         "min_angle must not exceed max_angle");
+  expect("sensors:\n  - {name: r, type: ray, link: a, range_resolution: -1}\n", "range_resolution");
+  expect("sensors:\n  - {name: r, type: ray, link: a, sample: 3}\n", "sample");
+  // A SensorSet computes the dynamics' sensors only: a camera beside an IMU is never sampled.
+  const Scene cams = resting_panda(
+      "sensors:\n  - {name: c, type: camera, link: no_such_link}\n"
+      "  - {name: i, type: imu, link: panda_hand}\n");
+  auto sim = make_simulator(cams);
+  SensorSet set(sim->model(), cams.sensors);
+  for (int k = 0; k < 3; ++k) {
+    set.before_step(*sim);
+    ASSERT_TRUE(sim->step());
+    set.after_step(*sim);
+    EXPECT_FALSE(set.reading(0).ready);
+    EXPECT_TRUE(set.reading(1).ready);
+  }
+}
+
+// The tags of Gazebo's camera, Kinect and laser tutorials (gazebo_ros_pkgs' plugins).
+TEST(Sensors, UrdfCameraDepthAndLaserTags) {
+  const std::string urdf = R"(<robot name="r">
+  <link name="base"/><link name="camera_link"/><link name="hokuyo_link"/>
+  <gazebo reference="camera_link">
+    <sensor type="camera" name="camera1">
+      <update_rate>30.0</update_rate>
+      <camera name="head">
+        <horizontal_fov>1.3962634</horizontal_fov>
+        <image><width>800</width><height>800</height><format>R8G8B8</format></image>
+        <clip><near>0.02</near><far>300</far></clip>
+        <noise><type>gaussian</type><mean>0.0</mean><stddev>0.007</stddev></noise>
+      </camera>
+      <plugin name="camera_controller" filename="libgazebo_ros_camera.so">
+        <alwaysOn>true</alwaysOn>
+        <updateRate>0.0</updateRate>
+        <cameraName>rrbot/camera1</cameraName>
+        <imageTopicName>image_raw</imageTopicName>
+        <cameraInfoTopicName>camera_info</cameraInfoTopicName>
+        <frameName>camera_link_optical</frameName>
+        <hackBaseline>0.07</hackBaseline>
+      </plugin>
+    </sensor>
+    <sensor type="depth" name="kinect">
+      <update_rate>20</update_rate>
+      <camera><horizontal_fov>1.047198</horizontal_fov>
+        <image><width>640</width><height>480</height><format>R8G8B8</format></image>
+        <clip><near>0.05</near><far>3</far></clip></camera>
+      <plugin name="camera_plugin" filename="libgazebo_ros_openni_kinect.so">
+        <cameraName>kinect_ir</cameraName>
+        <imageTopicName>/kinect/color/image_raw</imageTopicName>
+        <cameraInfoTopicName>/kinect/color/camera_info</cameraInfoTopicName>
+        <depthImageTopicName>/kinect/depth/image_raw</depthImageTopicName>
+        <depthImageCameraInfoTopicName>/kinect/depth/camera_info</depthImageCameraInfoTopicName>
+        <pointCloudTopicName>/kinect/depth/points</pointCloudTopicName>
+        <frameName>kinect_optical</frameName>
+        <pointCloudCutoff>0.5</pointCloudCutoff>
+      </plugin>
+    </sensor>
+  </gazebo>
+  <gazebo reference="hokuyo_link">
+    <sensor type="gpu_ray" name="head_hokuyo_sensor">
+      <pose>0 0 0 0 0 0</pose>
+      <update_rate>40</update_rate>
+      <ray>
+        <scan><horizontal><samples>720</samples><resolution>1</resolution>
+          <min_angle>-1.570796</min_angle><max_angle>1.570796</max_angle></horizontal></scan>
+        <range><min>0.10</min><max>30.0</max><resolution>0.01</resolution></range>
+        <noise><type>gaussian</type><mean>0.0</mean><stddev>0.01</stddev></noise>
+      </ray>
+      <plugin name="gazebo_ros_head_hokuyo_controller" filename="libgazebo_ros_gpu_laser.so">
+        <topicName>/rrbot/laser/scan</topicName>
+        <frameName>hokuyo_link</frameName>
+      </plugin>
+    </sensor>
+    <sensor type="ray" name="bad_laser">
+      <ray><range><min>5</min><max>1</max></range></ray>
+    </sensor>
+  </gazebo>
+</robot>)";
+  std::vector<std::string> warnings;
+  const auto s = sensors_from_urdf(urdf, &warnings);
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_EQ(s[0].type, SensorType::Camera);
+  EXPECT_EQ(s[0].name, "camera1");
+  EXPECT_EQ(s[0].link, "camera_link");
+  EXPECT_EQ(s[0].rate, 30);  // updateRate 0 keeps <update_rate>
+  EXPECT_EQ(s[0].camera.width, 800);
+  EXPECT_EQ(s[0].camera.height, 800);
+  EXPECT_NEAR(s[0].camera.hfov, 1.3962634, 1e-12);
+  EXPECT_EQ(s[0].camera.near, 0.02);
+  EXPECT_EQ(s[0].camera.far, 300);
+  EXPECT_EQ(s[0].noise.stddev, 0.007);
+  EXPECT_EQ(s[0].topic, "rrbot/camera1");
+  EXPECT_EQ(s[0].image_topic, "image_raw");
+  EXPECT_EQ(s[0].info_topic, "camera_info");
+  EXPECT_EQ(s[0].frame, "camera_link_optical");
+  EXPECT_EQ(s[1].type, SensorType::DepthCamera);
+  EXPECT_EQ(s[1].rate, 20);
+  EXPECT_EQ(s[1].camera.far, 3);
+  EXPECT_EQ(s[1].topic, "kinect_ir");
+  EXPECT_EQ(s[1].image_topic, "/kinect/color/image_raw");
+  EXPECT_EQ(s[1].info_topic, "/kinect/color/camera_info");
+  EXPECT_EQ(s[1].depth_topic, "/kinect/depth/image_raw");
+  EXPECT_EQ(s[1].depth_info_topic, "/kinect/depth/camera_info");
+  EXPECT_EQ(s[1].points_topic, "/kinect/depth/points");
+  EXPECT_EQ(s[1].frame, "kinect_optical");
+  EXPECT_EQ(s[2].type, SensorType::Ray);
+  EXPECT_EQ(s[2].rate, 40);
+  EXPECT_EQ(s[2].ray.samples, 720);
+  EXPECT_NEAR(s[2].ray.angle_min, -1.570796, 1e-12);
+  EXPECT_NEAR(s[2].ray.angle_max, 1.570796, 1e-12);
+  EXPECT_EQ(s[2].ray.range_min, 0.1);
+  EXPECT_EQ(s[2].ray.range_max, 30);
+  EXPECT_EQ(s[2].ray.resolution, 0.01);
+  EXPECT_EQ(s[2].noise.stddev, 0.01);
+  EXPECT_EQ(s[2].topic, "/rrbot/laser/scan");
+  EXPECT_EQ(s[2].frame, "hokuyo_link");
+  EXPECT_EQ(s[3].ray.range_max, LaserSpec().range_max);  // the bad range: defaults, one warning
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("'bad_laser'"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("range max"), std::string::npos) << warnings[0];
 }
 
 int main(int argc, char** argv) {

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """rostest for the sensors (test/sensors.test, test/sensors_urdf.test): each sensor given as
-TOPIC:KIND:FRAME:RATE (KIND imu, wrench or contact) publishes on TOPIC in FRAME, stamped with
+TOPIC:KIND:FRAME:RATE (KIND imu, wrench, contact, image, info or scan) publishes on TOPIC in FRAME, stamped with
 simulated time (never ahead of /clock) at RATE Hz of simulated time, with finite values."""
 import math
 import sys
@@ -13,15 +13,20 @@ import rostest
 from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Clock
 from se3_sim.msg import ContactsState
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 
-KINDS = {"imu": Imu, "wrench": WrenchStamped, "contact": ContactsState}
+KINDS = {"imu": Imu, "wrench": WrenchStamped, "contact": ContactsState, "image": Image,
+         "info": CameraInfo, "scan": LaserScan}
 
 
 def numbers(msg, kind):
     if kind == "imu":
         o, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
         return [o.x, o.y, o.z, o.w, w.x, w.y, w.z, a.x, a.y, a.z]
+    if kind in ("image", "info"):
+        return [msg.width, msg.height] + (list(msg.K) if kind == "info" else [])
+    if kind == "scan":  # +-Inf: nothing within range (REP 117)
+        return [r for r in msg.ranges if not math.isinf(r)] + [msg.angle_min, msg.angle_max]
     if kind == "wrench":
         f, t = msg.wrench.force, msg.wrench.torque
         return [f.x, f.y, f.z, t.x, t.y, t.z]

@@ -25,12 +25,28 @@
 #include <vector>
 
 #include "se3_sim/dynamics.h"
+#include "se3_sim/laser.h"
 
 namespace se3 {
 
 class Simulator;
 
-enum class SensorType { Imu, ForceTorque, Contact };
+enum class SensorType { Imu, ForceTorque, Contact, Camera, DepthCamera, Ray };
+
+/// Whether a type is drawn or cast (camera, depth_camera, ray) rather than computed from the
+/// dynamics: SensorSet leaves those out, the ros layer's sensor thread serves them.
+inline bool sensor_is_rendered(SensorType t) {
+  return t == SensorType::Camera || t == SensorType::DepthCamera || t == SensorType::Ray;
+}
+
+/// A camera's image (render/camera_sensor.h turns it into a CameraSensorSpec).
+struct CameraParams {
+  int width = 640;
+  int height = 480;
+  double hfov = 1.047;  ///< rad
+  double near = 0.05;   ///< m
+  double far = 10.0;    ///< m
+};
 
 /// Gaussian noise of a sensor's channels: each component gets mean + bias_k + N(0, stddev^2),
 /// bias_k drawn once per component (at construction and reset) from N(0, bias^2). All zero: no
@@ -54,10 +70,16 @@ struct SensorSpec {
   std::string topic;  ///< ROS topic ("" = the sensor's name)
   std::string frame;  ///< frame_id of its messages ("" = the link: see sensor_frame below)
   std::string where;  ///< "file:line" for messages
+  /// camera, depth_camera: the image; link may be "world" (pose then in the world). Topics
+  /// relative to the camera's namespace (topic, default its name) as gazebo_ros names them.
+  CameraParams camera;
+  std::string image_topic = "image_raw";
+  std::string info_topic = "camera_info";
+  std::string depth_topic = "depth/image_raw";
+  std::string depth_info_topic = "depth/camera_info";
+  std::string points_topic = "depth/points";
+  LaserSpec ray;  ///< ray: the scan
 };
-
-/// The `sensors:` item types that exist in the list but have no implementation yet.
-bool sensor_type_reserved(const std::string& type);
 
 /// Gazebo's tags in URDF text: every <gazebo reference="LINK"> holding a <sensor type="imu"> or
 /// <sensor type="contact"> (with <update_rate>, <noise> or <imu><noise>), and the gazebo_ros

@@ -40,6 +40,7 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
+#include "se3_sim/ros/rendered_sensors.h"
 #include "se3_sim/ros/world_services.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
@@ -264,6 +265,7 @@ class SimulatorNodeImpl {
   TorqueCommand torque_;
   // Sensors (docs/ros.md, "Sensors"): one publisher and frame_id each.
   std::unique_ptr<se3::SensorSet> sensors_;
+  std::unique_ptr<se3_ros::RenderedSensors> rendered_;  ///< cameras and lasers
   std::vector<ros::Publisher> sensor_pubs_;
   std::vector<std::string> sensor_frames_;
   std::vector<geometry_msgs::TransformStamped> sensor_tfs_;  ///< link -> sensor frame (static)
@@ -686,6 +688,7 @@ bool SimulatorNodeImpl::physics_step() {
   if (sensors_) sensors_->after_step(*sim_, ok);
   step_wall_ += Clock::now() - t0;
   if (sensors_) publish_sensors();
+  if (rendered_ && ok) rendered_->after_step(*sim_);
   ++period_steps_;
   if (ok) {
     ++anchored_;
@@ -1030,8 +1033,23 @@ bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
 
 void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
   std::vector<std::string> warnings;
-  const std::vector<se3::SensorSpec> specs = se3::scene_sensors(scene_, urdf_xml, &warnings);
+  std::vector<se3::SensorSpec> specs = se3::scene_sensors(scene_, urdf_xml, &warnings);
   for (const std::string& w : warnings) ROS_WARN("simulator: %s", w.c_str());
+  // Cameras and lasers: drawn on a thread of their own (rendered_sensors.h).
+  std::vector<se3::SensorSpec> drawn;
+  for (const se3::SensorSpec& s : specs) {
+    if (se3::sensor_is_rendered(s.type)) drawn.push_back(s);
+  }
+  specs.erase(
+      std::remove_if(specs.begin(), specs.end(),
+                     [](const se3::SensorSpec& s) { return se3::sensor_is_rendered(s.type); }),
+      specs.end());
+  if (!drawn.empty()) {
+    rendered_ = std::make_unique<se3_ros::RenderedSensors>(
+        nh_, scene_, *model_, se3::scene_geometry(scene_, *model_, urdf_xml), drawn, world_frame_,
+        use_sim_time_, lockstep_);
+    for (const auto& t : rendered_->static_transforms()) sensor_tfs_.push_back(t);
+  }
   if (specs.empty()) return;
   sensors_ =
       std::make_unique<se3::SensorSet>(*model_, specs, se3::scene_urdf_text(scene_, urdf_xml));

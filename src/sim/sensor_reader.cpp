@@ -13,8 +13,15 @@ namespace se3 {
 using Field = SceneReader::Field;
 
 // sensors: [{name, type, link | joint, pose: {position, orientation}, rate,
-//            noise: {mean, stddev, bias}, topic, frame}, ...]
+//            noise: {mean, stddev, bias}, topic, frame,
+//            camera, depth_camera: width, height, horizontal_fov, near, far;
+//            ray: samples, min_angle, max_angle, range_min, range_max, range_resolution}, ...]
 void read_scene_sensors(const SceneReader& r, const Field& v, std::vector<SensorSpec>& out) {
+  static const char* kTypes = "imu, force_torque, contact, camera, depth_camera, ray";
+  static const std::set<std::string> kCameraKeys = {"width", "height", "horizontal_fov", "near",
+                                                    "far"};
+  static const std::set<std::string> kRayKeys = {"samples",   "min_angle", "max_angle",
+                                                 "range_min", "range_max", "range_resolution"};
   std::set<std::string> names;
   for (const Field& item : r.items(v, 1000)) {
     SensorSpec s;
@@ -22,26 +29,79 @@ void read_scene_sensors(const SceneReader& r, const Field& v, std::vector<Sensor
     bool has_type = false;
     const Field* place = nullptr;
     std::vector<Field> fs = r.fields(
-        item, {"name", "type", "link", "joint", "pose", "rate", "noise", "topic", "frame"});
+        item, {"name",      "type",           "link",      "joint",     "pose",
+               "rate",      "noise",          "topic",     "frame",     "width",
+               "height",    "horizontal_fov", "near",      "far",       "samples",
+               "min_angle", "max_angle",      "range_min", "range_max", "range_resolution"});
     for (const Field& f : fs) {
       if (f.name == "type") {
         const std::string t = r.text(f);
-        if (sensor_type_reserved(t)) {
-          r.fail(f, "sensor type '" + t + "' is not supported yet (imu, force_torque, contact)");
-        }
         if (t == "imu") {
           s.type = SensorType::Imu;
         } else if (t == "force_torque") {
           s.type = SensorType::ForceTorque;
         } else if (t == "contact") {
           s.type = SensorType::Contact;
+        } else if (t == "camera") {
+          s.type = SensorType::Camera;
+        } else if (t == "depth_camera") {
+          s.type = SensorType::DepthCamera;
+        } else if (t == "ray") {
+          s.type = SensorType::Ray;
         } else {
-          r.fail(f, "unknown sensor type '" + t + "' (imu, force_torque, contact)");
+          r.fail(f, "unknown sensor type '" + t + "' (" + kTypes + ")");
         }
         has_type = true;
       }
     }
-    if (!has_type) r.fail(item, "'" + item.key + "' needs type: imu | force_torque | contact");
+    if (!has_type) r.fail(item, "'" + item.key + "' needs type: " + kTypes);
+    const bool camera = s.type == SensorType::Camera || s.type == SensorType::DepthCamera;
+    const bool ray = s.type == SensorType::Ray;
+    const Field* far_field = nullptr;
+    const Field* range_max_field = nullptr;
+    const Field* angle_field = nullptr;
+    for (const Field& f : fs) {
+      if (kCameraKeys.count(f.name) && !camera) {
+        r.fail(f, "'" + f.name + "' is a camera's key (type camera or depth_camera)");
+      }
+      if (kRayKeys.count(f.name) && !ray) r.fail(f, "'" + f.name + "' is a ray sensor's key");
+      if (f.name == "width") {
+        s.camera.width = int(r.integer(f, 1, 8192));
+      } else if (f.name == "height") {
+        s.camera.height = int(r.integer(f, 1, 8192));
+      } else if (f.name == "horizontal_fov") {
+        s.camera.hfov = r.in_range(f, 1e-3, 3.14);
+      } else if (f.name == "near") {
+        s.camera.near = r.in_range(f, 1e-4, 1e4);
+      } else if (f.name == "far") {
+        s.camera.far = r.in_range(f, 1e-4, 1e6);
+        far_field = &f;
+      } else if (f.name == "samples") {
+        s.ray.samples = int(r.integer(f, 1, 100000));
+      } else if (f.name == "min_angle") {
+        s.ray.angle_min = r.in_range(f, -2 * M_PI, 2 * M_PI);
+        angle_field = &f;
+      } else if (f.name == "max_angle") {
+        s.ray.angle_max = r.in_range(f, -2 * M_PI, 2 * M_PI);
+        angle_field = &f;
+      } else if (f.name == "range_min") {
+        s.ray.range_min = r.in_range(f, 0, 1e6);
+      } else if (f.name == "range_max") {
+        s.ray.range_max = r.in_range(f, 1e-4, 1e6);
+        range_max_field = &f;
+      } else if (f.name == "range_resolution") {
+        s.ray.resolution = r.in_range(f, 0, 1e3);
+      }
+    }
+    if (camera && !(s.camera.far > s.camera.near)) {
+      r.fail(far_field ? *far_field : item, "far must be greater than near");
+    }
+    if (ray && !(s.ray.range_max > s.ray.range_min)) {
+      r.fail(range_max_field ? *range_max_field : item, "range_max must be greater than range_min");
+    }
+    if (ray && s.ray.angle_min > s.ray.angle_max) {
+      r.fail(angle_field ? *angle_field : item, "min_angle must not exceed max_angle");
+    }
     for (const Field& f : fs) {
       if (f.name == "name") {
         s.name = r.text(f);
@@ -138,20 +198,109 @@ void read_noise(const tinyxml2::XMLElement* noise, SensorNoise& n) {
 void read_plugin(const tinyxml2::XMLElement* p, SensorSpec& s) {
   if (const char* t = child_text(p, "topicName")) s.topic = trimmed(t);
   if (const char* t = child_text(p, "bumperTopicName")) s.topic = trimmed(t);
+  // Cameras (libgazebo_ros_camera.so, libgazebo_ros_openni_kinect.so): cameraName is the
+  // namespace of the image topics.
+  if (const char* t = child_text(p, "cameraName")) s.topic = trimmed(t);
+  if (const char* t = child_text(p, "imageTopicName")) s.image_topic = trimmed(t);
+  if (const char* t = child_text(p, "cameraInfoTopicName")) s.info_topic = trimmed(t);
+  if (const char* t = child_text(p, "depthImageTopicName")) s.depth_topic = trimmed(t);
+  if (const char* t = child_text(p, "depthImageCameraInfoTopicName"))
+    s.depth_info_topic = trimmed(t);
+  if (const char* t = child_text(p, "pointCloudTopicName")) s.points_topic = trimmed(t);
   if (const char* t = child_text(p, "frameName")) s.frame = trimmed(t);
   if (const char* t = child_text(p, "bodyName")) s.link = trimmed(t);
   if (const char* t = child_text(p, "jointName")) s.joint = trimmed(t);
   double rate = 0;
   if (child_number(p, "updateRate", &rate) || child_number(p, "updateRateHZ", &rate)) {
-    if (rate >= 0) s.rate = rate;
+    // A camera's or laser's updateRate 0 (gazebo_ros: "as the sensor") keeps <update_rate>.
+    if (rate > 0 || (rate == 0 && !sensor_is_rendered(s.type))) s.rate = rate;
   }
   double g = 0;
   if (child_number(p, "gaussianNoise", &g)) s.noise.stddev = std::abs(g);
 }
 
+// <camera><horizontal_fov/><image><width/><height/></image><clip><near/><far/></clip>
+// <noise/></camera>. Values out of range: one warning each, the default kept.
+template <class Warn>
+void read_camera(const tinyxml2::XMLElement* c, SensorSpec& s, Warn&& warn) {
+  if (!c) return;
+  const std::string at = s.where + ": sensor '" + s.name + "': ";
+  double v = 0;
+  if (child_number(c, "horizontal_fov", &v)) {
+    if (v > 1e-3 && v < 3.14) {
+      s.camera.hfov = v;
+    } else {
+      warn(at + "horizontal_fov " + std::to_string(v) + " is not in (0, pi); default kept");
+    }
+  }
+  if (const auto* im = c->FirstChildElement("image")) {
+    if (child_number(im, "width", &v)) {
+      if (v >= 1 && v <= 8192) {
+        s.camera.width = int(v);
+      } else {
+        warn(at + "image width " + std::to_string(v) + " is not in [1, 8192]; default kept");
+      }
+    }
+    if (child_number(im, "height", &v)) {
+      if (v >= 1 && v <= 8192) {
+        s.camera.height = int(v);
+      } else {
+        warn(at + "image height " + std::to_string(v) + " is not in [1, 8192]; default kept");
+      }
+    }
+  }
+  if (const auto* clip = c->FirstChildElement("clip")) {
+    double n = s.camera.near, f = s.camera.far;
+    child_number(clip, "near", &n);
+    child_number(clip, "far", &f);
+    if (n > 0 && f > n) {
+      s.camera.near = n;
+      s.camera.far = f;
+    } else {
+      warn(at + "clip near " + std::to_string(n) + ", far " + std::to_string(f) +
+           " need 0 < near < far; defaults kept");
+    }
+  }
+  read_noise(c->FirstChildElement("noise"), s.noise);
+}
+
+// <ray><scan><horizontal><samples/><resolution/><min_angle/><max_angle/></horizontal></scan>
+// <range><min/><max/><resolution/></range><noise/></ray>. Gazebo's horizontal resolution
+// multiplies the samples (samples * resolution rays, usually 1).
+template <class Warn>
+void read_ray(const tinyxml2::XMLElement* r, SensorSpec& s, Warn&& warn) {
+  if (!r) return;
+  const std::string at = s.where + ": sensor '" + s.name + "': ";
+  LaserSpec l = s.ray;
+  double v = 0;
+  const tinyxml2::XMLElement* scan = r->FirstChildElement("scan");
+  if (const auto* h = scan ? scan->FirstChildElement("horizontal") : nullptr) {
+    double res = 1;
+    child_number(h, "resolution", &res);
+    if (child_number(h, "samples", &v)) l.samples = int(std::lround(v * (res > 0 ? res : 1)));
+    child_number(h, "min_angle", &l.angle_min);
+    child_number(h, "max_angle", &l.angle_max);
+  }
+  if (const auto* range = r->FirstChildElement("range")) {
+    child_number(range, "min", &l.range_min);
+    child_number(range, "max", &l.range_max);
+    child_number(range, "resolution", &l.resolution);
+  }
+  std::string err;
+  if (check_laser_spec(l, &err)) {
+    s.ray = l;
+  } else {
+    warn(at + err + "; the defaults are kept");
+  }
+  read_noise(r->FirstChildElement("noise"), s.noise);
+}
+
 bool known_plugin(const std::string& file) {
   return file == "libgazebo_ros_imu_sensor.so" || file == "libgazebo_ros_imu.so" ||
-         file == "libgazebo_ros_ft_sensor.so" || file == "libgazebo_ros_bumper.so";
+         file == "libgazebo_ros_ft_sensor.so" || file == "libgazebo_ros_bumper.so" ||
+         file == "libgazebo_ros_camera.so" || file == "libgazebo_ros_openni_kinect.so" ||
+         file == "libgazebo_ros_depth_camera.so" || file == "libgazebo_ros_laser.so" ||
+         file == "libgazebo_ros_gpu_laser.so";
 }
 
 std::string plugin_name(const tinyxml2::XMLElement* p) {
@@ -182,9 +331,11 @@ std::vector<SensorSpec> sensors_from_urdf(const std::string& urdf_xml,
          se = se->NextSiblingElement("sensor")) {
       const std::string type = se->Attribute("type") ? se->Attribute("type") : "";
       const std::string name = se->Attribute("name") ? se->Attribute("name") : "";
-      if (type != "imu" && type != "contact") {
+      const bool camera = type == "camera" || type == "depth";
+      const bool ray = type == "ray" || type == "gpu_ray";
+      if (type != "imu" && type != "contact" && !camera && !ray) {
         warn("URDF line " + std::to_string(se->GetLineNum()) + ": sensor '" + name + "' of type '" +
-             type + "' is not supported (imu, contact); ignored");
+             type + "' is not supported (imu, contact, camera, depth, ray, gpu_ray); ignored");
         continue;
       }
       if (!ref) {
@@ -195,8 +346,12 @@ std::vector<SensorSpec> sensors_from_urdf(const std::string& urdf_xml,
       SensorSpec s;
       s.name = name.empty() ? std::string(ref) + "_" + type : name;
       s.type = type == "imu" ? SensorType::Imu : SensorType::Contact;
+      if (camera) s.type = type == "depth" ? SensorType::DepthCamera : SensorType::Camera;
+      if (ray) s.type = SensorType::Ray;
       s.link = ref;
       s.where = "URDF line " + std::to_string(se->GetLineNum());
+      if (camera) read_camera(se->FirstChildElement("camera"), s, warn);
+      if (ray) read_ray(se->FirstChildElement("ray"), s, warn);
       double rate = 0;
       if (child_number(se, "update_rate", &rate) && rate >= 0) s.rate = rate;
       if (const char* pose = child_text(se, "pose")) {

@@ -26,10 +26,6 @@ SE3 body_pose(const Model& m, const Data& d, const SE3& base, int b) {
 
 }  // namespace
 
-bool sensor_type_reserved(const std::string& type) {
-  return type == "camera" || type == "depth_camera" || type == "ray";
-}
-
 std::uint64_t SensorSet::seed_of(const std::string& name) {
   std::uint64_t h = 14695981039346656037ull;
   for (const char c : name) {
@@ -47,6 +43,10 @@ SensorSet::SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
   for (const SensorSpec& s : specs_) {
     Resolved r;
     int li = -1;
+    if (sensor_is_rendered(s.type)) {  // drawn elsewhere (the ros layer): never sampled here
+      sensors_.push_back(std::move(r));
+      continue;
+    }
     if (s.type == SensorType::ForceTorque) {
       for (int l = 0; l < nl; ++l) {
         if (!model.links[l].joint.empty() && model.links[l].joint == s.joint) li = l;
@@ -163,7 +163,9 @@ void SensorSet::before_step(const Simulator& sim) {
           rate > 0 ? static_cast<int>(std::max(1.0, std::round(1.0 / (rate * dt_)))) : 1;
     }
   }
-  for (size_t i = 0; i < sensors_.size(); ++i) due = due || k % sensors_[i].period == 0;
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    due = due || (!sensor_is_rendered(specs_[i].type) && k % sensors_[i].period == 0);
+  }
   if (!due) return;
   const State& x = sim.state();
   x0_.base = x.base;
@@ -186,6 +188,7 @@ void SensorSet::after_step(const Simulator& sim, bool ok) {
   const ConstraintSystem* cs = sim.constraints();
   contact_step_ = cs && cs->report().velocity_steps != velocity_steps0_;
   for (size_t i = 0; i < sensors_.size(); ++i) {
+    if (sensor_is_rendered(specs_[i].type)) continue;
     if (step0_ % sensors_[i].period == 0) sample(sim, static_cast<int>(i));
   }
 }
