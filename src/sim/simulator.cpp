@@ -83,6 +83,7 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
     if (model_->friction[i] != 0) rubbing_.push_back({model_->idx_v(i), model_->friction[i]});
   }
   set_initial_state(initial);
+  if (config_.mimic_joints && !model_->mimics.empty()) rebuild_constraints();
   reset();
 }
 
@@ -528,8 +529,20 @@ std::string Simulator::deep_penetration_warning() {
 void Simulator::rebuild_constraints() {
   constraints_.reset();
   constraints_start_.reset();
-  if (spec_.empty() && bodies_.empty() && !scene_collision_) return;
-  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec_);
+  ConstraintSpec spec = spec_;
+  if (config_.mimic_joints && !model_->mimics.empty()) {
+    const std::vector<BilateralConstraint> mimics = mimic_constraints(*model_);
+    spec.bilateral.insert(spec.bilateral.end(), mimics.begin(), mimics.end());
+    // The mimic joints start where their leaders put them (leaders first: chains in order).
+    for (const JointMimic& mm : model_->mimics) {
+      initial_.q[model_->idx_q(mm.joint)] =
+          mm.multiplier * initial_.q[model_->idx_q(mm.leader)] + mm.offset;
+      initial_.v[model_->idx_v(mm.joint)] = mm.multiplier * initial_.v[model_->idx_v(mm.leader)];
+    }
+    wrap_continuous_joints(*model_, initial_.q);
+  }
+  if (spec.empty() && bodies_.empty() && !scene_collision_) return;
+  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
   if (!bodies_.empty()) {
     constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }
