@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "se3_sim/gazebo_tags.h"
 #include "se3_sim/lie.h"
 
 namespace urdf {
@@ -227,6 +228,8 @@ struct UrdfDocument {
   std::vector<std::string> complaints;               ///< what urdfdom said while accepting the text
   /// Joints that move only massless links, with the position they are locked at.
   std::vector<std::pair<std::string, double>> massless;
+  /// The <gazebo> tags (gazebo_tags.h); their warnings are in `warnings`.
+  GazeboTags gazebo;
 };
 
 /// Parses URDF text. Throws ModelError with a one-line reason (refused text, urdfdom's error,

@@ -259,6 +259,13 @@ UrdfDocument parse_urdf_document(const std::string& xml) {
   if (!owner->u->getRoot()) throw ModelError("URDF has no root link");
   // Joints that move only massless links: locked (with the user's locks, in model_from_urdf).
   urdf_model_quirks(*owner->u, doc.massless, doc.warnings);
+  {
+    std::vector<std::string> links, joints;
+    for (const auto& kv : owner->u->links_) links.push_back(kv.first);
+    for (const auto& kv : owner->u->joints_) joints.push_back(kv.first);
+    doc.gazebo = read_gazebo_tags(text, links, joints);
+    doc.warnings.insert(doc.warnings.end(), doc.gazebo.warnings.begin(), doc.gazebo.warnings.end());
+  }
   doc.urdf = std::shared_ptr<const urdf::ModelInterface>(owner, owner->u.get());
   return doc;
 }

@@ -14,6 +14,15 @@ namespace se3 {
 
 namespace {
 constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+
+// The mimic joints of x where their leaders put them (leaders first: chains in order).
+void align_mimics(const Model& m, State& x) {
+  for (const JointMimic& mm : m.mimics) {
+    x.q[m.idx_q(mm.joint)] = mm.multiplier * x.q[m.idx_q(mm.leader)] + mm.offset;
+    x.v[m.idx_v(mm.joint)] = mm.multiplier * x.v[m.idx_v(mm.leader)];
+  }
+  wrap_continuous_joints(m, x.q);
+}
 }  // namespace
 
 KineticEnergyBound::KineticEnergyBound(const Model& model)
@@ -128,6 +137,7 @@ void Simulator::set_initial_state(const State& s) {
   if (!s.finite()) throw std::invalid_argument("initial state is not finite");
   initial_ = s;
   wrap_continuous_joints(*model_, initial_.q);
+  if (config_.mimic_joints) align_mimics(*model_, initial_);
 }
 
 void Simulator::set_state(const State& s) {
@@ -533,13 +543,7 @@ void Simulator::rebuild_constraints() {
   if (config_.mimic_joints && !model_->mimics.empty()) {
     const std::vector<BilateralConstraint> mimics = mimic_constraints(*model_);
     spec.bilateral.insert(spec.bilateral.end(), mimics.begin(), mimics.end());
-    // The mimic joints start where their leaders put them (leaders first: chains in order).
-    for (const JointMimic& mm : model_->mimics) {
-      initial_.q[model_->idx_q(mm.joint)] =
-          mm.multiplier * initial_.q[model_->idx_q(mm.leader)] + mm.offset;
-      initial_.v[model_->idx_v(mm.joint)] = mm.multiplier * initial_.v[model_->idx_v(mm.leader)];
-    }
-    wrap_continuous_joints(*model_, initial_.q);
+    align_mimics(*model_, initial_);  // the mimic joints start where their leaders put them
   }
   if (spec.empty() && bodies_.empty() && !scene_collision_) return;
   constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
