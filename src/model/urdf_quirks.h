@@ -6,7 +6,8 @@
 //  - urdf_model_quirks, on urdfdom's model: lower >= upper (a CAD exporter's 0 0) means no
 //    position limits; effort or velocity 0 means no such limit; a joint that moves only
 //    massless links (no inertial anywhere below it: a sensor or tool frame on a continuous
-//    joint) is locked at 0 (the nearest limit), since it has no dynamics; a link whose inertial breaks the triangle inequality is kept as given.
+//    joint) is locked at 0 (the nearest limit), since it has no dynamics; a link whose inertial
+//    breaks the triangle inequality is kept as given.
 // Each kind of quirk gives one warning naming every joint or link it concerns.
 #pragma once
 
