@@ -38,6 +38,12 @@ struct CollisionObject {
   int group = 0;           ///< 0: the robot (self-collision rules apply), 1: scene objects
   double mu = 0.8;         ///< Coulomb friction; a pair uses the larger of its two (as MuJoCo)
   double restitution = 0;
+  /// mu is the link's own (a URDF's Gazebo mu1/mu2): a pair with such an object uses its mu
+  /// (the smaller of two), as Gazebo's ground (mu 100) leaves a link's own coefficient to count.
+  bool mu_own = false;
+  /// Group 0: collides with the robot's other links even without CollisionOptions::
+  /// self_collision (a URDF's Gazebo selfCollide: a pair collides when either link says so).
+  bool self_collide = false;
 };
 
 /// A pair the sim layer says never collides (by frame: adjacency).

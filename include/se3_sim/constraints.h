@@ -3,7 +3,10 @@
 // Bilateral constraints Psi(q) w = 0 (eq. 27) with w the generalized velocity of dynamics.h:
 //   - point_world: a point of a link held at a world point,
 //   - point_point: a point of one link held on a point of another (closes a loop),
-//   - axis_parallel: an axis of a link kept parallel to a world axis.
+//   - axis_parallel: an axis of a link kept parallel to a world axis,
+//   - joint_coupling: a joint's coordinate held at multiplier times another's plus offset
+//     (q_j = m q_l + o: a URDF <mimic> joint, Model::mimics), one row whose Jacobian is +1 on
+//     the joint's rate and -m on the leader's (Psi_dot = 0).
 // A point constraint has one row per constrained world direction (x, y, z by default; a planar
 // loop names the two in-plane directions), an axis constraint two rows (the axis' components
 // along two world directions normal to the target axis).
@@ -57,7 +60,7 @@
 
 namespace se3 {
 
-enum class ConstraintType { PointWorld, PointPoint, AxisParallel };
+enum class ConstraintType { PointWorld, PointPoint, AxisParallel, JointCoupling };
 
 /// One bilateral constraint, by URDF link name (the model's links; "world" or "" is the world).
 struct BilateralConstraint {
@@ -73,7 +76,15 @@ struct BilateralConstraint {
   std::vector<Vec3> directions;
   /// point_world: take point_b from the initial state (the link point's world position there).
   bool world_point_from_initial = false;
+  /// joint_coupling: q[joint] = multiplier q[leader] + offset (joints of the model that move;
+  /// link_a is not used).
+  std::string joint, leader;
+  double multiplier = 1, offset = 0;
 };
+
+/// The joint_coupling constraints of the model's <mimic> joints (Model::mimics), named
+/// "mimic:JOINT", in the model's order (leaders first).
+std::vector<BilateralConstraint> mimic_constraints(const Model& model);
 
 /// A sphere (radius >= 0; 0 = a point) on a link that may touch the ground plane.
 struct ContactPoint {
@@ -265,6 +276,8 @@ class ConstraintSystem final : public AccelerationHook {
     Vec3 axis_a = Vec3::UnitZ(), axis_w = Vec3::UnitZ();
     std::vector<Vec3> dirs;  ///< row directions (point), or the two normals of axis_w (axis)
     int row0 = 0;
+    /// joint_coupling: a.body the joint, b.body its leader, q_a = mult q_b + off (one row)
+    double mult = 1, off = 0;
   };
   struct FreeBody {
     const Model* model = nullptr;
@@ -284,6 +297,8 @@ class ConstraintSystem final : public AccelerationHook {
   /// phi_, Psi_ and (with_bias, after kinematics with v) gamma_ = Psi_dot w.
   void fill_bilateral(bool with_bias);
   Vec3 point_world(const PointRef& p) const;
+  /// A joint_coupling's error q_a - mult q_b - off at q (an angle's wrapped into (-pi, pi]).
+  double coupling_error(const Bil& b, const VecX& q) const;
   /// Psi_dot w of a body point (world frame), from Vb_ and Ab_.
   Vec3 point_accel_bias(const PointRef& p) const;
   /// Solves Wb_ out = rhs (solver.h's solve_equality) and counts it in the report.
@@ -366,7 +381,7 @@ class ConstraintSystem final : public AccelerationHook {
   ConstraintReport report_;
 };
 
-/// "point_world", "point_point" or "axis_parallel".
+/// "point_world", "point_point", "axis_parallel" or "joint_coupling".
 std::string constraint_type_name(ConstraintType t);
 
 }  // namespace se3

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "se3_sim/gazebo_tags.h"
 #include "se3_sim/lie.h"
 
 namespace urdf {
@@ -119,6 +120,17 @@ struct LinkFrame {
   bool fixed = false;  ///< that joint is fixed in the URDF (a locked moving joint is not)
 };
 
+/// A URDF <mimic> joint: q[joint] = multiplier q[leader] + offset. The joint keeps its own
+/// coordinate (and its inertia); the simulator holds the relation as a bilateral constraint row
+/// (constraints.h, ConstraintType::JointCoupling), so that the dynamics and every per-joint
+/// array stay as they are and joint_states lists the joint.
+struct JointMimic {
+  int joint = 0;   ///< the mimic joint's body (1..n)
+  int leader = 0;  ///< the joint it follows (1..n; itself possibly a mimic joint)
+  double multiplier = 1;
+  double offset = 0;
+};
+
 struct Model {
   // ---- structure (sizes: n+1 for per-body arrays, index 0 = base)
   bool floating = false;    ///< the base's joint: Free, else Fixed (finalize() sets joints[0])
@@ -150,7 +162,9 @@ struct Model {
   std::vector<double> lower, upper;      ///< position limits (-inf, inf) when none
   std::vector<double> effort, velocity;  ///< effort/velocity limits (inf when none)
   std::vector<double> damping, friction;
-  std::vector<LinkFrame> links;       ///< every URDF link, root first (shapes: geometry.h)
+  std::vector<LinkFrame> links;  ///< every URDF link, root first (shapes: geometry.h)
+  /// The URDF's <mimic> joints whose joint and leader both move, leaders before their mimics.
+  std::vector<JointMimic> mimics;
   std::vector<std::string> warnings;  ///< e.g. inertias that break the triangle inequality
 
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< world frame
@@ -214,6 +228,8 @@ struct UrdfDocument {
   std::vector<std::string> complaints;               ///< what urdfdom said while accepting the text
   /// Joints that move only massless links, with the position they are locked at.
   std::vector<std::pair<std::string, double>> massless;
+  /// The <gazebo> tags (gazebo_tags.h); their warnings are in `warnings`.
+  GazeboTags gazebo;
 };
 
 /// Parses URDF text. Throws ModelError with a one-line reason (refused text, urdfdom's error,

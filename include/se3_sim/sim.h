@@ -195,6 +195,9 @@ struct SimConfig {
   double dt = 1e-3;
   StepperOptions stepper;
   GuardOptions guard;
+  /// The model's <mimic> joints (Model::mimics) held by joint_coupling constraint rows beside
+  /// the scene's constraints; false: each moves as a joint of its own.
+  bool mimic_joints = true;
 };
 
 struct SceneCollision;  // scene_collision.h

@@ -918,7 +918,8 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
       ok = ok && !(a.halfspace && b.halfspace);
       ok = ok && a.frame != b.frame;  // also static-static: both on kWorld
       ok = ok && !adjacent.count({a.frame, b.frame});
-      ok = ok && !(a.group == 0 && b.group == 0 && !options_.self_collision);
+      ok = ok && !(a.group == 0 && b.group == 0 && !options_.self_collision && !a.self_collide &&
+                   !b.self_collide);
       ok = ok && !(!a.link.empty() && !b.link.empty() && disabled.count({a.link, b.link}));
       m.allowed[std::size_t(i) * n + j] = ok;
     }

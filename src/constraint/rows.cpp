@@ -618,7 +618,11 @@ void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts
     rows.friction[n] = f1;
     rows.friction2[n] = f2;
     rows.normal[f1] = rows.normal[f2] = n;
-    rows.mu[n] = std::max(objects[c.a].mu, objects[c.b].mu);
+    const CollisionObject &oa = objects[c.a], &ob = objects[c.b];
+    rows.mu[n] = oa.mu_own && ob.mu_own ? std::min(oa.mu, ob.mu)
+                 : oa.mu_own            ? oa.mu
+                 : ob.mu_own            ? ob.mu
+                                        : std::max(oa.mu, ob.mu);
     const double g = -c.depth;
     rows.gap[n] = g;
     // A penetration is removed at erp per step, but no faster than max_correction_velocity: the

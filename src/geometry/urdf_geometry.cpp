@@ -234,6 +234,16 @@ GeometryModel geometry_from_urdf(const Model& model, const UrdfDocument& doc, Ge
     }
   }
   b.stand_ins();
+  // A <gazebo reference="LINK"><material>Gazebo/NAME</material> is what Gazebo draws: it
+  // replaces the URDF's colour of that link's visuals.
+  for (GeometryObject& o : b.g.visuals) {
+    const GazeboLink* gl = doc.gazebo.link(o.link);
+    std::array<float, 4> c;
+    if (!gl || gl->material.empty() || !gazebo_material_rgba(gl->material, c)) continue;
+    o.material.name = gl->material;
+    o.material.rgba = Vec4f(c[0], c[1], c[2], c[3]);
+    o.material.has_color = true;
+  }
   return std::move(b.g);
 }
 

@@ -15,6 +15,7 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/model.h"
 #include "urdf_guard.h"
+#include "urdf_mimic.h"
 #include "urdf_quirks.h"
 
 namespace se3 {
@@ -254,9 +255,17 @@ UrdfDocument parse_urdf_document(const std::string& xml) {
   owner->u = parse_urdf(text, err, &doc.complaints);
   if (!owner->u) throw ModelError("URDF rejected by urdfdom: " + err);
   check_urdf_joints(*owner->u);
+  check_urdf_mimics(*owner->u);
   if (!owner->u->getRoot()) throw ModelError("URDF has no root link");
   // Joints that move only massless links: locked (with the user's locks, in model_from_urdf).
   urdf_model_quirks(*owner->u, doc.massless, doc.warnings);
+  {
+    std::vector<std::string> links, joints;
+    for (const auto& kv : owner->u->links_) links.push_back(kv.first);
+    for (const auto& kv : owner->u->joints_) joints.push_back(kv.first);
+    doc.gazebo = read_gazebo_tags(text, links, joints);
+    doc.warnings.insert(doc.warnings.end(), doc.gazebo.warnings.begin(), doc.gazebo.warnings.end());
+  }
   doc.urdf = std::shared_ptr<const urdf::ModelInterface>(owner, owner->u.get());
   return doc;
 }
@@ -318,6 +327,7 @@ Model model_from_urdf(const UrdfDocument& doc, const UrdfOptions& options) {
   }
   m.finalize();
   m.validate();
+  read_mimics(u, m);
   group_quirk_warnings(m.warnings);
   return m;
 }

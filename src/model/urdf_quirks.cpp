@@ -87,7 +87,7 @@ std::string urdf_text_quirks(const std::string& xml, std::vector<std::string>& w
 
 void urdf_model_quirks(urdf::ModelInterface& u, std::vector<std::pair<std::string, double>>& lock,
                        std::vector<std::string>& warnings) {
-  std::vector<std::string> no_range, no_effort, mimic, massless;
+  std::vector<std::string> no_range, no_effort, massless;
   // Mass below each link (its own and its descendants'), without recursion: a URDF may be a
   // chain of thousands of links (urdf_guard.h bounds them, not the stack).
   std::map<std::string, double> below;
@@ -120,7 +120,6 @@ void urdf_model_quirks(urdf::ModelInterface& u, std::vector<std::pair<std::strin
     } else {
       no_effort.push_back(j.name);
     }
-    if (j.mimic) mimic.push_back(j.name);
     const auto b = below.find(j.child_link_name);
     const bool already =
         std::any_of(lock.begin(), lock.end(), [&](const auto& kv) { return kv.first == j.name; });
@@ -141,10 +140,6 @@ void urdf_model_quirks(urdf::ModelInterface& u, std::vector<std::pair<std::strin
   if (!no_effort.empty()) {
     warnings.push_back("URDF quirk: joint" + std::string(plural(no_effort)) + join(no_effort) +
                        " without a positive finite effort limit: efforts not clamped");
-  }
-  if (!mimic.empty()) {
-    warnings.push_back("URDF quirk: joint" + std::string(plural(mimic)) + join(mimic) +
-                       " with <mimic>: simulated as joints of their own");
   }
   if (!massless.empty()) {
     warnings.push_back("URDF quirk: joint" + std::string(plural(massless)) + join(massless) +

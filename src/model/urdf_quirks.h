@@ -4,10 +4,10 @@
 //    attribute, which urdfdom refuses as "not a valid float", is read as no limit; a xacro file
 //    (not expanded) is refused with what to do.
 //  - urdf_model_quirks, on urdfdom's model: lower >= upper (a CAD exporter's 0 0) means no
-//    position limits; effort or velocity 0 means no such limit; mimic joints are simulated as
-//    joints of their own; a joint that moves only massless links (no inertial anywhere below
-//    it: a sensor or tool frame on a continuous joint) is locked at 0 (the nearest limit), since
-//    it has no dynamics; a link whose inertial breaks the triangle inequality is kept as given.
+//    position limits; effort or velocity 0 means no such limit; a joint that moves only
+//    massless links (no inertial anywhere below it: a sensor or tool frame on a continuous
+//    joint) is locked at 0 (the nearest limit), since it has no dynamics; a link whose inertial
+//    breaks the triangle inequality is kept as given.
 // Each kind of quirk gives one warning naming every joint or link it concerns.
 #pragma once
 

@@ -315,8 +315,11 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
     opt.floating = scene.floating;
     opt.locked = scene.locked_joints;
     try {
-      m = urdf_xml.empty() ? model_from_urdf_file(scene.robot_path, opt)
-                           : model_from_urdf_string(urdf_xml, opt);
+      const UrdfDocument doc =
+          urdf_xml.empty() ? read_urdf_document(scene.robot_path) : parse_urdf_document(urdf_xml);
+      // Gazebo's <static>true</static>: the model does not fall (the scene's base: wins).
+      if (!scene.base_given && doc.gazebo.is_static == 1) opt.floating = false;
+      m = model_from_urdf(doc, opt);
     } catch (const ModelError& e) {
       // A locked joint the robot lacks is the scene's error: name the scene.
       const std::string what = e.what();

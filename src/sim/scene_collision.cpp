@@ -3,6 +3,7 @@
 
 #include <sys/stat.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -65,6 +66,25 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
       geometry = &loaded;
     }
     warnings = geometry->warnings;
+    // The links' <gazebo> surface tags (their warnings were given with the model's).
+    GazeboTags gz;
+    if (const std::string xml = scene_urdf_text(scene, urdf_xml); !xml.empty()) {
+      std::vector<std::string> links, joints;
+      for (const LinkFrame& lf : model->links) {
+        links.push_back(lf.name);
+        if (!lf.joint.empty()) joints.push_back(lf.joint);
+      }
+      gz = read_gazebo_tags(xml, links, joints);
+    }
+    auto surface = [&](CollisionObject& o) {
+      const GazeboLink* gl = gz.link(o.link);
+      if (!gl) return;
+      if (!std::isnan(gl->mu())) {
+        o.mu = gl->mu();
+        o.mu_own = true;
+      }
+      o.self_collide = gl->self_collide == 1;
+    };
     for (const GeometryObject& g : geometry->collisions) {
       if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
       if (g.shape.type == ShapeType::Mesh &&
@@ -86,6 +106,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
       o.shape = g.shape;
       o.group = 0;
       o.mu = robot_mu;
+      surface(o);
       objs.push_back(o);
       scene_object.push_back(-1);
       body.push_back(g.body);

@@ -14,6 +14,15 @@ namespace se3 {
 
 namespace {
 constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+
+// The mimic joints of x where their leaders put them (leaders first: chains in order).
+void align_mimics(const Model& m, State& x) {
+  for (const JointMimic& mm : m.mimics) {
+    x.q[m.idx_q(mm.joint)] = mm.multiplier * x.q[m.idx_q(mm.leader)] + mm.offset;
+    x.v[m.idx_v(mm.joint)] = mm.multiplier * x.v[m.idx_v(mm.leader)];
+  }
+  wrap_continuous_joints(m, x.q);
+}
 }  // namespace
 
 KineticEnergyBound::KineticEnergyBound(const Model& model)
@@ -83,6 +92,7 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
     if (model_->friction[i] != 0) rubbing_.push_back({model_->idx_v(i), model_->friction[i]});
   }
   set_initial_state(initial);
+  if (config_.mimic_joints && !model_->mimics.empty()) rebuild_constraints();
   reset();
   // An empty robot (a scene of objects alone: fixed, massless, no joints) is no model.
   if (model_->n > 0 || model_->floating || model_->total_mass() > 0) {
@@ -131,6 +141,7 @@ void Simulator::set_initial_state(const State& s) {
   if (!s.finite()) throw std::invalid_argument("initial state is not finite");
   initial_ = s;
   wrap_continuous_joints(*model_, initial_.q);
+  if (config_.mimic_joints) align_mimics(*model_, initial_);
 }
 
 void Simulator::set_state(const State& s) {
@@ -532,8 +543,14 @@ std::string Simulator::deep_penetration_warning() {
 void Simulator::rebuild_constraints() {
   constraints_.reset();
   constraints_start_.reset();
-  if (spec_.empty() && bodies_.empty() && !scene_collision_) return;
-  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec_);
+  ConstraintSpec spec = spec_;
+  if (config_.mimic_joints && !model_->mimics.empty()) {
+    const std::vector<BilateralConstraint> mimics = mimic_constraints(*model_);
+    spec.bilateral.insert(spec.bilateral.end(), mimics.begin(), mimics.end());
+    align_mimics(*model_, initial_);  // the mimic joints start where their leaders put them
+  }
+  if (spec.empty() && bodies_.empty() && !scene_collision_) return;
+  constraints_ = std::make_unique<ConstraintSystem>(*model_, spec);
   if (!bodies_.empty()) {
     constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }

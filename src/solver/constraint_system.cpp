@@ -18,8 +18,25 @@ std::string constraint_type_name(ConstraintType t) {
       return "point_point";
     case ConstraintType::AxisParallel:
       return "axis_parallel";
+    case ConstraintType::JointCoupling:
+      return "joint_coupling";
   }
   return "unknown";
+}
+
+std::vector<BilateralConstraint> mimic_constraints(const Model& model) {
+  std::vector<BilateralConstraint> out;
+  for (const JointMimic& mm : model.mimics) {
+    BilateralConstraint c;
+    c.type = ConstraintType::JointCoupling;
+    c.joint = model.joint_name[mm.joint];
+    c.leader = model.joint_name[mm.leader];
+    c.name = "mimic:" + c.joint;
+    c.multiplier = mm.multiplier;
+    c.offset = mm.offset;
+    out.push_back(c);
+  }
+  return out;
 }
 
 namespace {
@@ -73,9 +90,27 @@ ConstraintSystem::ConstraintSystem(const Model& model, const ConstraintSpec& spe
     Bil b;
     b.type = c.type;
     b.name = c.name.empty() ? constraint_type_name(c.type) + std::to_string(k) : c.name;
+    b.row0 = row;
+    if (c.type == ConstraintType::JointCoupling) {
+      b.a.body = model.joint_index(c.joint);
+      b.b.body = model.joint_index(c.leader);
+      if (b.a.body < 1)
+        throw ModelError(b.name + ": the model has no moving joint '" + c.joint + "'");
+      if (b.b.body < 1) {
+        throw ModelError(b.name + ": the model has no moving joint '" + c.leader + "' to follow");
+      }
+      if (b.a.body == b.b.body) throw ModelError(b.name + ": a joint cannot follow itself");
+      if (!std::isfinite(c.multiplier) || !std::isfinite(c.offset)) {
+        throw ModelError(b.name + ": multiplier and offset must be finite");
+      }
+      b.mult = c.multiplier;
+      b.off = c.offset;
+      ++row;
+      bil_.push_back(b);
+      continue;
+    }
     if (is_world(c.link_a)) throw ModelError(b.name + ": link_a must be a link of the model");
     b.a = resolve(c.link_a, c.point_a, b.name);
-    b.row0 = row;
     if (c.type == ConstraintType::AxisParallel) {
       const int k_link = model.link_index(c.link_a);
       b.axis_a = model.links[k_link].offset.R * unit(c.axis_a, b.name + " axis_a");
@@ -374,10 +409,21 @@ Vec3 ConstraintSystem::point_accel_bias(const PointRef& p) const {
   return data_.oMb[p.body].R * a;
 }
 
+double ConstraintSystem::coupling_error(const Bil& b, const VecX& q) const {
+  const double e = q[model_.idx_q(b.a.body)] - b.mult * q[model_.idx_q(b.b.body)] - b.off;
+  return model_.continuous(b.a.body) ? wrap_angle(e) : e;
+}
+
 void ConstraintSystem::fill_bilateral(bool with_bias) {
   Psi_.setZero();
   for (const Bil& b : bil_) {
-    if (b.type == ConstraintType::AxisParallel) {
+    if (b.type == ConstraintType::JointCoupling) {
+      // q_a - m q_b - o: linear in q, so Psi_dot w = 0 (fk_q_ is the q of kinematics()).
+      phi_[b.row0] = coupling_error(b, fk_q_);
+      Psi_(b.row0, model_.idx_v(b.a.body)) += 1.0;
+      Psi_(b.row0, model_.idx_v(b.b.body)) -= b.mult;
+      if (with_bias) gamma_[b.row0] = 0;
+    } else if (b.type == ConstraintType::AxisParallel) {
       const Mat3& R = data_.oMb[b.a.body].R;
       const Vec3 u = R * b.axis_a;
       Vec3 wdot = Vec3::Zero(), w = Vec3::Zero();
@@ -527,6 +573,15 @@ void ConstraintSystem::assemble_bilateral_forces(const VecX& lam, double scale) 
   for (size_t k = 0; k < bil_.size(); ++k) {
     const Bil& b = bil_[k];
     ConstraintForce& f = forces_[k];
+    if (b.type == ConstraintType::JointCoupling) {
+      // The generalized force on the joint (N m or N along its axis); its leader gets -mult times.
+      f.point = data_.oMb[b.a.body].p;
+      f.force.setZero();
+      f.torque.setZero();
+      f.joint_force = scale * lam[b.row0];
+      f.active = f.joint_force != 0;
+      continue;
+    }
     f.point = point_world(b.a);
     f.force.setZero();
     f.torque.setZero();
@@ -582,7 +637,12 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
   for (size_t k = 0; k < bil_.size(); ++k) {
     const Bil& b = bil_[k];
     const int id = static_cast<int>(k);
-    if (b.type == ConstraintType::AxisParallel) {
+    if (b.type == ConstraintType::JointCoupling) {
+      const int r = rows_.add(RowType::Equality, id);
+      rows_.J(r, model_.idx_v(b.a.body)) += 1.0;
+      rows_.J(r, model_.idx_v(b.b.body)) -= b.mult;
+      rows_.b[r] = -params_.bilateral_erp * coupling_error(b, x.q) / h;
+    } else if (b.type == ConstraintType::AxisParallel) {
       add_axis_rows(rows_, kin_, b.a.body, data_.oMb[b.a.body].R * b.axis_a, b.dirs[0], b.dirs[1],
                     h, params_, id);
     } else {
