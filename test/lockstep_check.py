@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""rostest for lockstep (test/lockstep.test): the rospy controller of the README (extracted
+"""rostest for lockstep (test/lockstep.test): the rospy controller of docs/guide.md (extracted
 from the page, so the page's code is the code that runs) reaches its targets; every accepted
 command (torque_command or a controller's) is answered by exactly one joint_states, /tf,
 chain_state and /clock, one control period on; the same commands after a reset give
@@ -29,9 +29,9 @@ PERIOD = 0.01  # control_period in lockstep.test
 
 
 def doc_example():
-    text = open(os.path.join(HERE, "..", "README.md")).read()
+    text = open(os.path.join(HERE, "..", "docs", "guide.md")).read()
     m = re.search(r"<!-- lockstep-example -->\s*```python\n(.*?)```", text, re.S)
-    assert m, "README.md has no lockstep example"
+    assert m, "docs/guide.md has no lockstep example"
     return m.group(1)
 
 

@@ -223,7 +223,6 @@ class ConstraintSystem final : public AccelerationHook {
   /// max_external_contacts: room for contacts from outside (StepInput::contacts; the deepest
   /// first when there are more).
   void set_free_bodies(const std::vector<const Model*>& bodies, int max_external_contacts = 0);
-  int free_bodies() const { return static_cast<int>(free_.size()); }
   using StepInput = ConstraintStepInput;
   /// Whether a velocity step of h from x would have any unilateral row (a limit or contact
   /// within reach), from the free acceleration a_free and the given extra input.

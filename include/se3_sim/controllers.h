@@ -88,7 +88,6 @@ class Pid {
   Pid() = default;
   explicit Pid(const PidGains& g) : gains_(g) {}
   const PidGains& gains() const { return gains_; }
-  void set_gains(const PidGains& g) { gains_ = g; }
   /// Clears the integral and the last error.
   void reset();
   /// The command for error e over a period dt, the derivative from the last error.

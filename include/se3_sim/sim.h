@@ -388,9 +388,8 @@ class Simulator {
   /// std::invalid_argument (state unchanged) when the sizes do not match or the state is not
   /// finite (State::finite).
   void set_state(const State& s);
-  /// Changes the integrator or step size (state kept).
+  /// Changes the integrator (state kept).
   void set_integrator(const std::string& name);
-  void set_dt(double dt);
   /// Sum of accepted internal steps, rejected steps and dynamics calls since reset.
   std::uint64_t substeps() const { return substeps_; }
   std::uint64_t rejected() const { return rejected_; }

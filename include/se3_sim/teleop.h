@@ -66,10 +66,6 @@ struct Event {
 
   static Event make_key(KeyCode code, char ch = 0);
   static Event make_mouse(const MouseEvent& m);
-  bool is_char(char c) const {
-    return type == Type::Key && key.code == KeyCode::Char && key.ch == c;
-  }
-  bool is_key(KeyCode c) const { return type == Type::Key && key.code == c; }
 };
 
 /// Incremental decoder of terminal input bytes (raw mode) into key and mouse events.

@@ -210,12 +210,6 @@ void Simulator::set_integrator(const std::string& name) {
   config_.integrator = name;
 }
 
-void Simulator::set_dt(double dt) {
-  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("dt must be positive");
-  config_.dt = dt;
-  stepper_->restart();
-}
-
 double Simulator::set_joint_effort(int i, double effort) {
   if (i < 1 || i > model_->n) throw std::out_of_range("joint index out of range");
   if (!std::isfinite(effort)) throw std::invalid_argument("effort is not finite");
