@@ -103,6 +103,10 @@ class CollisionModel {
  public:
   CollisionModel(std::vector<CollisionObject> objects, CollisionOptions options);
   ~CollisionModel();
+  /// The broad phase as a new model has it. Its tree's shape, and so the order in which it
+  /// reports pairs (and the contact solver meets its rows), follows the history of its updates:
+  /// after this, the same motions give the same contacts bit for bit (Simulator::reset).
+  void reset_broad_phase();
   CollisionModel(CollisionModel&&) noexcept;
   CollisionModel& operator=(CollisionModel&&) noexcept;
 

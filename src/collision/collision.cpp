@@ -929,18 +929,7 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
       if (m.fcl[i] && m.fcl[j] && m.ok(i, j)) m.tree_pairs = true;
     }
   }
-  // Static objects are placed once; the broad phase holds every non-half-space object.
-  std::vector<fcl::CollisionObjectd*> all;
-  for (int i = 0; i < n; ++i) {
-    if (objects_[i].frame == CollisionObject::kWorld) m.world[i] = objects_[i].placement;
-    if (!m.fcl[i]) continue;
-    m.fcl[i]->setTransform(to_fcl(m.world[i]));
-    m.fcl[i]->computeAABB();
-    m.fcl[i]->inflate(options_.margin / 2);
-    all.push_back(m.fcl[i].get());
-  }
-  m.manager.registerObjects(all);
-  m.manager.setup();
+  reset_broad_phase();
   m.request.enable_contact = true;
   m.request.num_max_contacts = std::size_t(options_.max_contacts_per_pair);
   m.dist_request.enable_nearest_points = true;
@@ -993,6 +982,24 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
 }
 
 CollisionModel::~CollisionModel() = default;
+void CollisionModel::reset_broad_phase() {
+  Impl& m = *impl_;
+  // Static objects are placed once, the others start at the identity; the broad phase holds
+  // every non-half-space object.
+  m.manager.clear();
+  std::vector<fcl::CollisionObjectd*> all;
+  for (int i = 0; i < m.n; ++i) {
+    m.world[i] = objects_[i].frame == CollisionObject::kWorld ? objects_[i].placement : SE3();
+    if (!m.fcl[i]) continue;
+    m.fcl[i]->setTransform(to_fcl(m.world[i]));
+    m.fcl[i]->computeAABB();
+    m.fcl[i]->inflate(options_.margin / 2);
+    all.push_back(m.fcl[i].get());
+  }
+  m.manager.registerObjects(all);
+  m.manager.setup();
+}
+
 CollisionModel::CollisionModel(CollisionModel&&) noexcept = default;
 CollisionModel& CollisionModel::operator=(CollisionModel&&) noexcept = default;
 

@@ -181,6 +181,7 @@ void Simulator::reset() {
   // The constraint solver keeps warm starts between steps: start again from the system as set,
   // so that the same commands after a reset give the same states.
   if (constraints_start_) constraints_ = std::make_unique<ConstraintSystem>(*constraints_start_);
+  if (CollisionModel* c = collider()) c->reset_broad_phase();
   stepper_->restart();
   refresh_reference();
   W_ = W_checked_ = 0;
