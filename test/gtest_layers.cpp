@@ -51,6 +51,12 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/simulator_node.h", "ros"},
     {"se3_sim/ros/teleop_node.h", "ros"},
     {"se3_sim/ros/renderer_convert.h", "ros"},
+    {"se3_sim/ros/rendered_sensors.h", "ros"},
+    {"se3_sim/ros/world_services.h", "ros"},
+    {"se3_sim/gazebo_tags.h", "model"},
+    {"se3_sim/laser.h", "collision"},
+    {"se3_sim/render/camera_sensor.h", "render"},
+    {"se3_sim/world.h", "sim"},
 };
 
 // What each layer may include: itself and the layers below it.

@@ -3,6 +3,7 @@
 
 #include <regex.h>
 #include <ros/package.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
 #include <cmath>
@@ -25,7 +26,6 @@
 #include "se3_sim/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
-#include "visualization_msgs/MarkerArray.h"
 
 namespace se3_ros {
 
