@@ -101,8 +101,19 @@ se3_sim::Step::Response step(unsigned n) {
 }
 
 /// Joint positions by name from the latest chain_state published after now.
+// The positions of a chain_state published after this call began: stamped (wall time here, no
+// use_sim_time) at or after it. Three publish periods at least, and under load as long as
+// delivery takes (up to 10 s): a fixed wait alone returned a message sent before a step.
 std::map<std::string, double> fresh_positions() {
+  const ros::Time since = ros::Time::now();
   wait(3.0 / g_rate);
+  for (int k = 0; k < 1000; ++k) {
+    {
+      std::lock_guard<std::mutex> l(g->mu);
+      if (g->last_cs.header.stamp >= since) break;
+    }
+    wait(0.01);
+  }
   std::lock_guard<std::mutex> l(g->mu);
   std::map<std::string, double> out;
   for (size_t k = 0; k < g->last_cs.name.size(); ++k) {
