@@ -2,12 +2,14 @@
 #include "urdf_guard.h"
 
 #include <console_bridge/console.h>
+#include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <mutex>
 #include <unordered_map>
 #include <vector>
@@ -199,9 +201,49 @@ void check_urdf_text(const std::string& xml) {
   }
 }
 
+// The joints' link graph, read before urdfdom sees it: a joint whose parent is its child, or
+// joints whose links form a loop, make urdfdom's link tree hold itself through shared pointers
+// (it then leaks it, accepted or not). One line naming the joints; "" when there is none (or
+// when tinyxml2 cannot read the text: urdfdom then refuses it with its own reason).
+std::string link_loop(const std::string& xml) {
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) return "";
+  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  if (!robot) return "";
+  std::map<std::string, std::pair<std::string, std::string>> up;  // child -> (parent, joint)
+  for (const tinyxml2::XMLElement* j = robot->FirstChildElement("joint"); j;
+       j = j->NextSiblingElement("joint")) {
+    const tinyxml2::XMLElement* p = j->FirstChildElement("parent");
+    const tinyxml2::XMLElement* c = j->FirstChildElement("child");
+    const char* name = j->Attribute("name");
+    const char* parent = p ? p->Attribute("link") : nullptr;
+    const char* child = c ? c->Attribute("link") : nullptr;
+    if (!name || !parent || !child) continue;  // urdfdom's own error
+    if (std::strcmp(parent, child) == 0) {
+      return std::string("joint '") + name + "': its parent and child are the same link '" + child +
+             "'";
+    }
+    up.emplace(child, std::make_pair(parent, name));  // a second parent: urdfdom's own error
+  }
+  // Walk up from every link; a walk longer than the number of joints is a loop.
+  for (const auto& kv : up) {
+    std::string at = kv.first, joints;
+    for (std::size_t k = 0; k <= up.size(); ++k) {
+      const auto it = up.find(at);
+      if (it == up.end()) break;
+      if (k < 8) joints += (joints.empty() ? "'" : " -> '") + it->second.second + "'";
+      at = it->second.first;
+      if (at == kv.first) return "the joints " + joints + " form a loop of links";
+    }
+  }
+  return "";
+}
+
 urdf::ModelInterfaceSharedPtr parse_urdf(const std::string& xml, std::string& error,
                                          std::vector<std::string>* messages) {
   error.clear();
+  error = link_loop(xml);
+  if (!error.empty()) return nullptr;
   std::string thrown;
   auto keep = [&](const CaptureHandler& h, char stand_in) {
     for (std::string m : h.errors) {
