@@ -9,6 +9,7 @@
 #include "se3_sim/format.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
+#include "shape_extent.h"
 
 namespace se3 {
 
@@ -338,34 +339,6 @@ const VecX& Simulator::step_forces() {
   add_link_wrenches(forces_);
   return forces_;
 }
-
-namespace {
-
-// The smallest extent of a shape (m): what a body may move in one step before it can pass
-// through something as thin as itself unseen.
-double smallest_extent(const Shape& s) {
-  switch (s.type) {
-    case ShapeType::Box:
-      return s.box.minCoeff();
-    case ShapeType::Sphere:
-    case ShapeType::Capsule:
-      return 2 * s.radius;
-    case ShapeType::Cylinder:
-      return std::min(2 * s.radius, s.length);
-    case ShapeType::Mesh:
-      break;
-  }
-  if (!s.mesh || s.mesh->positions.empty()) return 0;
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Vec3f& p : s.mesh->positions) {
-    const Vec3 q = p.cast<double>().cwiseProduct(s.scale);
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  return (hi - lo).cwiseAbs().minCoeff();
-}
-
-}  // namespace
 
 void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   std::vector<ObjectBody> bodies;

@@ -12,6 +12,7 @@
 #include "se3_sim/constraint.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
+#include "shape_extent.h"
 
 namespace se3 {
 
@@ -49,29 +50,6 @@ void check_rates(const VecX& v, double max_rate, const std::string& what) {
                      what + " has a rate of " + fig(v.cwiseAbs().maxCoeff()) + " above the limit " +
                          fig(max_rate) + " (GuardOptions::max_rate)");
   }
-}
-
-// The smallest extent of a shape (m), as simulator.cpp's for the tunnelling warning.
-double extent(const Shape& s) {
-  switch (s.type) {
-    case ShapeType::Box:
-      return s.box.minCoeff();
-    case ShapeType::Sphere:
-    case ShapeType::Capsule:
-      return 2 * s.radius;
-    case ShapeType::Cylinder:
-      return std::min(2 * s.radius, s.length);
-    case ShapeType::Mesh:
-      break;
-  }
-  if (!s.mesh || s.mesh->positions.empty()) return 0;
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Vec3f& p : s.mesh->positions) {
-    const Vec3 q = p.cast<double>().cwiseProduct(s.scale);
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  return (hi - lo).cwiseAbs().minCoeff();
 }
 
 CollisionObject object_collider(const SceneObject& o, int frame) {
@@ -264,7 +242,7 @@ WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
     b.initial = State(*b.model);
     b.initial.base = o.pose;
     b.initial.v = o.twist;
-    b.size = extent(o.shape);
+    b.size = smallest_extent(o.shape);
     const int old = object_index(o.name);
     e->body_from.push_back(old >= 0 ? body_of(old) : -1);
     e->body_models.push_back(b.model.get());

@@ -1,0 +1,36 @@
+// The smallest extent of a collision shape, shared by the Simulator's objects (simulator.cpp) and
+// the objects spawned at run time (world.cpp).
+#pragma once
+
+#include <algorithm>
+#include <limits>
+
+#include "se3_sim/geometry.h"
+
+namespace se3 {
+
+/// The smallest extent of a shape (m): what a body may move in one step before it can pass
+/// through something as thin as itself unseen (the tunnelling warning).
+inline double smallest_extent(const Shape& s) {
+  switch (s.type) {
+    case ShapeType::Box:
+      return s.box.minCoeff();
+    case ShapeType::Sphere:
+    case ShapeType::Capsule:
+      return 2 * s.radius;
+    case ShapeType::Cylinder:
+      return std::min(2 * s.radius, s.length);
+    case ShapeType::Mesh:
+      break;
+  }
+  if (!s.mesh || s.mesh->positions.empty()) return 0;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3f& p : s.mesh->positions) {
+    const Vec3 q = p.cast<double>().cwiseProduct(s.scale);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  return (hi - lo).cwiseAbs().minCoeff();
+}
+
+}  // namespace se3
