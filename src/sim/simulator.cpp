@@ -6,10 +6,10 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
+#include "object_parts.h"
 #include "se3_sim/format.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
-#include "shape_extent.h"
 
 namespace se3 {
 
@@ -382,19 +382,9 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   std::vector<CollisionObject> colliders;
   for (size_t j = 0, free_index = 0; j < object_specs_.size(); ++j) {
     const SceneObject& o = object_specs_[j];
-    CollisionObject c;
-    c.name = o.name;
-    c.shape = o.shape;
-    c.group = 1;
-    c.mu = o.mu;
-    c.restitution = o.restitution;
-    if (o.is_static) {
-      c.frame = CollisionObject::kWorld;
-      c.placement = o.pose;
-    } else {
-      c.frame = model_->n + 1 + static_cast<int>(free_index++);
-    }
-    colliders.push_back(c);
+    const int frame =
+        o.is_static ? CollisionObject::kWorld : model_->n + 1 + static_cast<int>(free_index++);
+    colliders.push_back(object_collider(o, frame));
   }
   for (const ObjectBody& b : bodies_) {
     body_models_.push_back(b.model.get());

@@ -8,11 +8,11 @@
 #include <limits>
 #include <stdexcept>
 
+#include "object_parts.h"
 #include "scene_objects_reader.h"
 #include "se3_sim/constraint.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
-#include "shape_extent.h"
 
 namespace se3 {
 
@@ -50,22 +50,6 @@ void check_rates(const VecX& v, double max_rate, const std::string& what) {
                      what + " has a rate of " + fig(v.cwiseAbs().maxCoeff()) + " above the limit " +
                          fig(max_rate) + " (GuardOptions::max_rate)");
   }
-}
-
-CollisionObject object_collider(const SceneObject& o, int frame) {
-  CollisionObject c;
-  c.name = o.name;
-  c.shape = o.shape;
-  c.group = 1;
-  c.mu = o.mu;
-  c.restitution = o.restitution;
-  if (o.is_static) {
-    c.frame = CollisionObject::kWorld;
-    c.placement = o.pose;
-  } else {
-    c.frame = frame;
-  }
-  return c;
 }
 
 // World axes [R w; R v] of a body-frame twist [w; v] of a frame with rotation R.

@@ -1,11 +1,13 @@
-// The smallest extent of a collision shape, shared by the Simulator's objects (simulator.cpp) and
-// the objects spawned at run time (world.cpp).
+// What the Simulator's scene objects (simulator.cpp) and the objects spawned at run time
+// (world.cpp) share: a shape's smallest extent and an object's collision object.
 #pragma once
 
 #include <algorithm>
 #include <limits>
 
+#include "se3_sim/collision.h"
 #include "se3_sim/geometry.h"
+#include "se3_sim/scene_objects.h"
 
 namespace se3 {
 
@@ -31,6 +33,24 @@ inline double smallest_extent(const Shape& s) {
     hi = hi.cwiseMax(q);
   }
   return (hi - lo).cwiseAbs().minCoeff();
+}
+
+/// The collision object of scene object o: static ones placed in the world, free ones on their
+/// body's frame.
+inline CollisionObject object_collider(const SceneObject& o, int frame) {
+  CollisionObject c;
+  c.name = o.name;
+  c.shape = o.shape;
+  c.group = 1;
+  c.mu = o.mu;
+  c.restitution = o.restitution;
+  if (o.is_static) {
+    c.frame = CollisionObject::kWorld;
+    c.placement = o.pose;
+  } else {
+    c.frame = frame;
+  }
+  return c;
 }
 
 }  // namespace se3
