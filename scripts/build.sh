@@ -21,6 +21,17 @@ if [[ "$(readlink "$ws/src/se3_sim" 2>/dev/null)" != "$repo" ]]; then
     { echo "se3_sim: $ws/src/se3_sim exists and is not a link to $repo"; exit 1; }
   ln -sfn "$repo" "$ws/src/se3_sim"
 fi
+# catkin writes the tests' environment (build/catkin_generated/setup_cached.sh, which ctest's
+# rostests run in) when it configures, with only the folders that exist then. The generated
+# python messages' folder appears later, during the build, so a first configure would leave
+# PYTHONPATH empty there and every rostest that imports se3_sim.msg fail with "No module named
+# 'se3_sim'". Make it first; refresh a workspace configured without it.
+py="$ws/devel/lib/python3/dist-packages"
+mkdir -p "$py"
+cached="$ws/build/catkin_generated/setup_cached.sh"
+if [[ -f $cached ]] && ! grep -q "$py" "$cached"; then
+  /usr/bin/python3 "$ws/build/catkin_generated/generate_cached_setup.py" > /dev/null
+fi
 cd "$ws"
 catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -j"$(nproc)" "$@" > "$repo/.build/build.log" 2>&1 || { tail -n 60 "$repo/.build/build.log"; echo "se3_sim: build failed (full log: .build/build.log)"; exit 1; }

@@ -12,8 +12,11 @@ from it), two ways:
   installed.
 
 Usage: scripts/check_deps.py [--levels base,test] [--no-installed] [--junit FILE]
+       scripts/check_deps.py --test-env WS [--junit FILE]
 Prints one line per problem (naming the file and line, or the Debian package to install) and
-exits 1 on any; with --junit it writes check-deps.xml for scripts/test_summary.py.
+exits 1 on any; with --junit it writes check-deps.xml for scripts/test_summary.py. --test-env
+checks a built workspace instead: that the environment ctest runs the rostests in imports the
+generated se3_sim.msg and se3_sim.srv.
 """
 import argparse
 import ast
@@ -374,6 +377,20 @@ def installed_problems(deps, levels):
     return problems
 
 
+def test_env_problems(ws):
+    """The rostests run in build/catkin_generated/env_cached.sh, which catkin writes when it
+    configures: its PYTHONPATH must reach the generated se3_sim.msg and se3_sim.srv."""
+    env = os.path.join(ws, 'build', 'catkin_generated', 'env_cached.sh')
+    if not os.path.isfile(env):
+        return ['%s is missing: the workspace is not configured' % env]
+    r = subprocess.run([env, '/usr/bin/python3', '-c', 'import se3_sim.msg, se3_sim.srv'],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        last = (r.stderr.strip().splitlines() or ['exit %d' % r.returncode])[-1]
+        return ['the tests\' environment (%s) cannot import the messages: %s' % (env, last)]
+    return []
+
+
 def junit(path, cases):
     """cases: [(name, seconds, problems)]"""
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -399,9 +416,18 @@ def main():
     ap.add_argument('--no-installed', action='store_true',
                     help='only the declared check (nothing about this machine)')
     ap.add_argument('--junit', help='write the results as JUnit XML (check-deps.xml)')
+    ap.add_argument('--test-env', metavar='WS',
+                    help='only check that the environment ctest runs the tests in (the built '
+                    'workspace WS) imports the generated messages')
     args = ap.parse_args()
-    deps = read_deps()
     cases = []
+    if args.test_env:
+        t = time.time()
+        cases.append(('TestEnvironmentImportsTheMessages', time.time() - t,
+                      test_env_problems(args.test_env)))
+        cases[-1] = (cases[-1][0], time.time() - t, cases[-1][2])
+        return report(cases, args.junit)
+    deps = read_deps()
     t = time.time()
     problems = declared_problems(deps)
     cases.append(('ScriptsAndTestsCallOnlyDeclaredPrograms', time.time() - t, problems))
@@ -411,14 +437,18 @@ def main():
         cases.append(('DeclaredProgramsAndModulesAreInstalled', time.time() - t,
                       installed_problems(deps, levels)))
         cases[-1] = (cases[-1][0], time.time() - t, cases[-1][2])
+    return report(cases, args.junit)
+
+
+def report(cases, junit_path):
     bad = 0
     for name, _, problems in cases:
         for p in problems:
             print('se3_sim deps: %s' % p)
         print('Deps.%s: %s' % (name, 'failed (%d)' % len(problems) if problems else 'passed'))
         bad += bool(problems)
-    if args.junit:
-        junit(args.junit, cases)
+    if junit_path:
+        junit(junit_path, cases)
     return 1 if bad else 0
 
 

@@ -26,7 +26,8 @@ stage "deps.sh" "$t0"
 ws=${SE3_SIM_WS:-$(dirname "$repo")/$(basename "$repo")_ws}
 results="$ws/build/test_results"
 built="$repo/.build/release-built"  # written once the Release build is there
-rm -rf "$results" "$built" "$repo/.build/check-cross_compile_arm64.xml" "$repo/.build/check-deps.xml"
+rm -rf "$results" "$built" "$repo/.build/check-cross_compile_arm64.xml" "$repo/.build/check-deps.xml" \
+  "$repo/.build/check-test_env.xml"
 mkdir -p "$results"
 
 # Behind: the sanitizer build (ASan + UBSan) of the library, its gtests and the fuzz targets,
@@ -83,6 +84,8 @@ catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPy
   exit 1
 }
 stage "tests build (Release)" "$s"
+# A check of its own (check-test_env.xml): the rostests' environment imports the messages.
+python3 "$repo/scripts/check_deps.py" --test-env "$ws" --junit "$repo/.build/check-test_env.xml" || true
 # catkin's test wrappers (run_tests.py through ctest: each writes its JUnit file, or a
 # MISSING-*.xml when the test wrote none). The rostests one at a time; the gtests one at a time
 # beside them, niced.
@@ -100,6 +103,7 @@ s=$(date +%s)
 wait "$background" || true
 stage "waiting for the sanitizer stream" "$s"
 mv -f "$repo/.build/check-cross_compile_arm64.xml" "$repo/.build/check-deps.xml" \
+  "$repo/.build/check-test_env.xml" \
   "$results/se3_sim/" 2> /dev/null || true
 cat "$repo/.build/san-build.out" "$repo/.build/san-run.out" 2> /dev/null || true
 stage "total" "$t0"
