@@ -176,6 +176,32 @@ TEST(Sensors, ForceTorqueOnFixedWristJointReadsWhatHangsBelow) {
   EXPECT_EQ(sensors.period(1), 10);
 }
 
+// The force-torque sensor on a fixed joint reads the merged links' inertias from the URDF text:
+// through the guarded parse, so a "%n" that urdfdom quotes in a message (a material's rgba) is
+// never formatted printf-style (it crashed here when the sensor parsed the text itself).
+TEST(Sensors, ForceTorqueUrdfWithPercentNInAMaterialIsReadSafely) {
+  const Scene scene =
+      resting_panda("sensors:\n  - {name: wrist, type: force_torque, joint: panda_hand_joint}\n");
+  const std::string clean = file_text(kRobots + "panda.urdf");
+  std::string text = clean;
+  const size_t robot = text.find('>', text.find("<robot"));
+  ASSERT_NE(robot, std::string::npos);
+  text.insert(robot + 1, "<material name=\"bad\"><color rgba=\"1 %n%n%s%s 1\"/></material>");
+  // The same readings as from the clean text: the material changes no inertia.
+  Vec3 force[2], torque[2];
+  for (int k = 0; k < 2; ++k) {
+    auto sim = make_simulator(scene);
+    SensorSet sensors(sim->model(), scene.sensors, k == 0 ? clean : text);
+    run(*sim, sensors, 0.05);
+    ASSERT_TRUE(sensors.reading(0).ready);
+    force[k] = sensors.reading(0).force;
+    torque[k] = sensors.reading(0).torque;
+  }
+  EXPECT_GT(force[0].norm(), 1.0);
+  EXPECT_EQ(force[1], force[0]);
+  EXPECT_EQ(torque[1], torque[0]);
+}
+
 TEST(Sensors, ForceTorqueDuringPushMatchesContactForce) {
   // The shipped scene's sensors sample at 100 Hz: these sample every step.
   std::string text = scene_text("panda_push");

@@ -1,13 +1,14 @@
 // SensorSet (sensors.h): IMU, force-torque and contact readings from a step's motion.
 #include "se3_sim/sensors.h"
 
-#include <urdf_parser/urdf_parser.h>
+#include <urdf_model/model.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "se3_sim/collision.h"
 #include "se3_sim/constraints.h"
+#include "se3_sim/model.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -38,7 +39,7 @@ std::uint64_t SensorSet::seed_of(const std::string& name) {
 SensorSet::SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
                      const std::string& urdf_xml)
     : model_(&model), specs_(specs), data_(model), x0_(model), a_(VecX::Zero(model.nv)) {
-  urdf::ModelInterfaceSharedPtr urdf;
+  std::shared_ptr<const urdf::ModelInterface> urdf;
   const int nl = static_cast<int>(model.links.size());
   for (const SensorSpec& s : specs_) {
     Resolved r;
@@ -94,8 +95,13 @@ SensorSet::SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
             throw SensorError(sensor_where(s) + ": joint '" + s.joint +
                               "' is fixed and the URDF text is not at hand");
           }
-          urdf = urdf::parseURDF(urdf_xml);
-          if (!urdf) throw SensorError(sensor_where(s) + ": the URDF text does not parse");
+          // Through the guarded parse (model.h), never urdfdom's own: it formats the text it
+          // quotes printf-style.
+          try {
+            urdf = parse_urdf_document(urdf_xml).urdf;
+          } catch (const ModelError& e) {
+            throw SensorError(sensor_where(s) + ": " + e.what());
+          }
         }
         for (int l : r.links) {
           if (model.links[l].body != r.body) continue;
