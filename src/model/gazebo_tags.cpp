@@ -10,23 +10,15 @@
 #include <set>
 #include <utility>
 
+#include "xml_text.h"
+
 namespace se3 {
 namespace {
 
-std::string trimmed(const char* s) {
-  std::string t = s ? s : "";
-  const auto a = t.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return "";
-  return t.substr(a, t.find_last_not_of(" \t\r\n") - a + 1);
-}
+using xml_text::trimmed;
 
 bool number(const std::string& t, double& out) {
-  if (t.empty()) return false;
-  char* end = nullptr;
-  const double v = std::strtod(t.c_str(), &end);
-  if (*end != '\0' || !std::isfinite(v)) return false;
-  out = v;
-  return true;
+  return xml_text::finite_number(t, out);
 }
 
 bool boolean(const std::string& t, int& out) {

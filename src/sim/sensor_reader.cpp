@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <set>
 
+#include "../model/xml_text.h"
 #include "scene_reader.h"
 #include "se3_sim/sensors.h"
 
@@ -170,11 +171,7 @@ bool child_number(const tinyxml2::XMLElement* e, const char* name, double* out) 
   return true;
 }
 
-std::string trimmed(const char* t) {
-  std::string s = t ? t : "";
-  const auto a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
-  return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
-}
+using xml_text::trimmed;
 
 // SDF's <noise><type>gaussian</type><mean/><stddev/><bias_mean/></noise>, or the older IMU
 // <noise><rate>...</rate><accel>...</accel></noise> (accel's numbers taken).

@@ -5,17 +5,13 @@
 
 #include <cstdlib>
 
+#include "../model/xml_text.h"
+
 namespace se3 {
 
 namespace {
 
-std::string trimmed(const char* s) {
-  if (!s) return "";
-  std::string t(s);
-  const size_t a = t.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return "";
-  return t.substr(a, t.find_last_not_of(" \t\r\n") - a + 1);
-}
+using xml_text::trimmed;
 
 std::string interface_of(const tinyxml2::XMLElement* e) {
   std::string s = trimmed(e->GetText());
@@ -35,10 +31,8 @@ void add_interfaces(const tinyxml2::XMLElement* parent, std::vector<std::string>
 double reduction_of(const tinyxml2::XMLElement* parent, double fallback) {
   const auto* r = parent->FirstChildElement("mechanicalReduction");
   if (!r) return fallback;
-  const std::string s = trimmed(r->GetText());
-  char* end = nullptr;
-  const double x = std::strtod(s.c_str(), &end);
-  return !s.empty() && *end == '\0' ? x : fallback;
+  double x = 0;
+  return xml_text::finite_number(trimmed(r->GetText()), x) ? x : fallback;
 }
 
 }  // namespace
