@@ -1,7 +1,7 @@
 // What the laser scanners see: the robot's collision shapes, the objects and the ground.
-#include <cmath>
-
 #include "se3_sim/laser_world.h"
+
+#include <cmath>
 
 namespace se3 {
 
