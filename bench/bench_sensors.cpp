@@ -13,7 +13,8 @@
 //                                       built with OSMesa; as bench_render's RGB comparison)
 //
 //   bench_sensors [google-benchmark flags]     medians of 9 repetitions
-//   bench_sensors --frames=N [--depth-only]    N camera frames at 640x480 only (for callgrind:
+//   bench_sensors --frames=N [--depth-only] [--size=WxH]   N camera frames only, 640x480
+//                                              unless --size (for callgrind:
 //     valgrind --tool=callgrind --toggle-collect='se3::render::CameraSensor::render*'
 //              bench_sensors --frames=10; a frame's count is the difference of two N)
 #include <benchmark/benchmark.h>
@@ -277,9 +278,11 @@ void BM_LlvmpipeDepth(benchmark::State& state, int W, int H) {
 }
 #endif
 
-int frames_only(int n, bool color) {
+int frames_only(int n, bool color, int width, int height) {
   const World& w = world();
   render::CameraSensorSpec spec;
+  spec.width = width;
+  spec.height = height;
   spec.far = 6;
   spec.color = color;
   render::CameraSensor cam(spec);
@@ -287,7 +290,8 @@ int frames_only(int n, bool color) {
   opt.simplify_error = 0;
   cam.set_model(w.model, w.geometry, opt);
   for (int k = 0; k < n; ++k) cam.render(w.camera, w.oMb, w.objects);
-  std::printf("%d frames, centre depth %.4f m\n", n, cam.depth()[240 * 640 + 320]);
+  std::printf("%d frames, centre depth %.4f m\n", n,
+              cam.depth()[std::size_t(height / 2) * width + width / 2]);
   return 0;
 }
 
@@ -297,17 +301,21 @@ int main(int argc, char** argv) {
   std::vector<char*> rest;
   int frames = 0;
   bool color = true;
+  int width = 640, height = 480;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
     if (a.rfind("--frames=", 0) == 0) {
       frames = std::stoi(a.substr(9));
     } else if (a == "--depth-only") {
       color = false;
+    } else if (a.rfind("--size=", 0) == 0 && a.find('x') != std::string::npos) {
+      width = std::stoi(a.substr(7));
+      height = std::stoi(a.substr(a.find('x') + 1));
     } else {
       rest.push_back(argv[i]);
     }
   }
-  if (frames > 0) return frames_only(frames, color);
+  if (frames > 0) return frames_only(frames, color, width, height);
   auto reg = [](benchmark::internal::Benchmark* b) {
     b->Unit(benchmark::kMillisecond)
         ->MeasureProcessCPUTime()
