@@ -360,6 +360,8 @@ void RenderedSensors::reset() {
   }
   I.cv.wait(lock, [&] { return !I.busy; });
   for (Impl::Sensor& s : I.sensors) s.rng.seed(se3::SensorSet::seed_of(s.spec.name));
+  lock.unlock();
+  I.cv.notify_all();  // a flush() waiting for the dropped frame
 }
 
 void RenderedSensors::Impl::set_objects(const std::vector<se3::SceneObject>& objects) {
