@@ -3,6 +3,7 @@
 //
 //   Camera/<W>x<H>/<full|simplified>   one CameraSensor frame: rgb8 + depth + organized cloud
 //   Camera/<W>x<H>/rgb_only             the same frame without depth and cloud
+//   Camera/<W>x<H>/depth_only           depth and cloud without colour (nothing shaded)
 //   Scan/raycast/<N>                    an N-sample 360 deg LaserScanner sweep (ray casts against
 //                                       the collision hulls, table, box and ground)
 //   Scan/depth_sweep/<N>                the alternative: N samples rendered as three 1-row depth
@@ -12,9 +13,10 @@
 //                                       built with OSMesa; as bench_render's RGB comparison)
 //
 //   bench_sensors [google-benchmark flags]     medians of 9 repetitions
-//   bench_sensors --frames=N                   N camera frames at 640x480 only (for callgrind:
+//   bench_sensors --frames=N [--depth-only] [--size=WxH]   N camera frames only, 640x480
+//                                              unless --size (for callgrind:
 //     valgrind --tool=callgrind --toggle-collect='se3::render::CameraSensor::render*'
-//              bench_sensors --frames=10)
+//              bench_sensors --frames=10; a frame's count is the difference of two N)
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -106,13 +108,14 @@ const World& world() {
   return *w;
 }
 
-void BM_Camera(benchmark::State& state, int width, int height, bool full, bool depth) {
+void BM_Camera(benchmark::State& state, int width, int height, bool full, bool depth, bool color) {
   const World& w = world();
   render::CameraSensorSpec spec;
   spec.width = width;
   spec.height = height;
   spec.far = 6;
   spec.depth = depth;
+  spec.color = color;
   render::CameraSensor cam(spec);
   render::DrawOptions opt;
   if (full) opt.simplify_error = 0;
@@ -275,16 +278,20 @@ void BM_LlvmpipeDepth(benchmark::State& state, int W, int H) {
 }
 #endif
 
-int frames_only(int n) {
+int frames_only(int n, bool color, int width, int height) {
   const World& w = world();
   render::CameraSensorSpec spec;
+  spec.width = width;
+  spec.height = height;
   spec.far = 6;
+  spec.color = color;
   render::CameraSensor cam(spec);
   render::DrawOptions opt;
   opt.simplify_error = 0;
   cam.set_model(w.model, w.geometry, opt);
   for (int k = 0; k < n; ++k) cam.render(w.camera, w.oMb, w.objects);
-  std::printf("%d frames, centre depth %.4f m\n", n, cam.depth()[240 * 640 + 320]);
+  std::printf("%d frames, centre depth %.4f m\n", n,
+              cam.depth()[std::size_t(height / 2) * width + width / 2]);
   return 0;
 }
 
@@ -292,11 +299,23 @@ int frames_only(int n) {
 
 int main(int argc, char** argv) {
   std::vector<char*> rest;
+  int frames = 0;
+  bool color = true;
+  int width = 640, height = 480;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a.rfind("--frames=", 0) == 0) return frames_only(std::stoi(a.substr(9)));
-    rest.push_back(argv[i]);
+    if (a.rfind("--frames=", 0) == 0) {
+      frames = std::stoi(a.substr(9));
+    } else if (a == "--depth-only") {
+      color = false;
+    } else if (a.rfind("--size=", 0) == 0 && a.find('x') != std::string::npos) {
+      width = std::stoi(a.substr(7));
+      height = std::stoi(a.substr(a.find('x') + 1));
+    } else {
+      rest.push_back(argv[i]);
+    }
   }
+  if (frames > 0) return frames_only(frames, color, width, height);
   auto reg = [](benchmark::internal::Benchmark* b) {
     b->Unit(benchmark::kMillisecond)
         ->MeasureProcessCPUTime()
@@ -308,11 +327,13 @@ int main(int argc, char** argv) {
     const std::string base =
         "Camera/" + std::to_string(size.first) + "x" + std::to_string(size.second);
     reg(benchmark::RegisterBenchmark((base + "/full").c_str(), BM_Camera, size.first, size.second,
-                                     true, true));
+                                     true, true, true));
     reg(benchmark::RegisterBenchmark((base + "/simplified").c_str(), BM_Camera, size.first,
-                                     size.second, false, true));
+                                     size.second, false, true, true));
     reg(benchmark::RegisterBenchmark((base + "/rgb_only").c_str(), BM_Camera, size.first,
-                                     size.second, true, false));
+                                     size.second, true, false, true));
+    reg(benchmark::RegisterBenchmark((base + "/depth_only").c_str(), BM_Camera, size.first,
+                                     size.second, true, true, false));
   }
 #if SE3_SIM_HAVE_OSMESA
   setenv("LP_NUM_THREADS", "1", 1);

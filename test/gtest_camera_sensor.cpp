@@ -219,6 +219,70 @@ TEST(CameraSensor, KReprojectsTheBoxCornerToItsPixel) {
   EXPECT_FALSE(red(i0 - 1, j0 - 1));
 }
 
+// A depth camera without colour draws the same depth and points, bit for bit, as one with it
+// (box faces large and small triangles of a sphere, the ground), its cloud's rgb 0; switched
+// back on it draws the colour image a colour camera draws.
+TEST(CameraSensor, DepthOnlyGivesTheSameDepthBitForBit) {
+  CameraSensorSpec s = odd_spec();
+  s.ground = true;
+  std::vector<Marker> scene = the_box();
+  Marker ball;
+  ball.type = Marker::Type::Sphere;
+  ball.a = Vec3(2.0, -0.6, 0.4);
+  ball.size = 0.3;
+  scene.push_back(ball);
+  scene[0].R = Eigen::AngleAxisd(0.3, Vec3::UnitZ()).toRotationMatrix();
+  const SE3 pose(optical_in_body() * Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix(),
+                 Vec3(0, 0.1, 1));
+  CameraSensor colour(s);
+  s.color = false;
+  CameraSensor depth_only(s);
+  EXPECT_FALSE(depth_only.color());
+  for (int frame = 0; frame < 2; ++frame) {  // the first frame and one over a cached background
+    colour.render(pose, {}, scene);
+    depth_only.render(pose, {}, scene);
+    const std::size_t n = colour.depth().size();
+    ASSERT_EQ(std::memcmp(colour.depth().data(), depth_only.depth().data(), 4 * n), 0);
+    int hits = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      hits += std::isfinite(colour.depth()[k]);
+      for (int c = 0; c < 3; ++c) {
+        const float a = colour.cloud()[4 * k + c], b = depth_only.cloud()[4 * k + c];
+        ASSERT_TRUE(std::memcmp(&a, &b, 4) == 0) << k;
+      }
+      uint32_t rgb;
+      std::memcpy(&rgb, &depth_only.cloud()[4 * k + 3], 4);
+      ASSERT_EQ(rgb, 0u) << k;
+    }
+    EXPECT_GT(hits, 20000);
+  }
+  depth_only.set_color(true);
+  depth_only.render(pose, {}, scene);
+  EXPECT_EQ(depth_only.rgb(), colour.rgb());
+  EXPECT_EQ(
+      std::memcmp(colour.cloud().data(), depth_only.cloud().data(), 4 * colour.cloud().size()), 0);
+}
+
+// A camera sees the ground plane, not the viewer's grid lines: looking down at the origin
+// (where the grid's axes cross) every pixel is the background's colour.
+TEST(CameraSensor, NoGridLinesInTheImage) {
+  CameraSensorSpec s = odd_spec();
+  s.ground = true;
+  CameraSensor cam(s);
+  const Mat3 down = (Mat3() << 1, 0, 0, 0, -1, 0, 0, 0, -1).finished();  // z down, x along x
+  cam.render(SE3(down, Vec3(0.1, 0.2, 2.0)), {}, {});
+  const Renderer& r = cam.renderer();
+  for (int j = 0; j < s.height; ++j) {
+    for (int i = 0; i < s.width; ++i) {
+      const uint32_t want = r.background(i, j);
+      const uint8_t* p = &cam.rgb()[3 * (std::size_t(j) * s.width + i)];
+      ASSERT_EQ(p[0], want >> 16 & 0xff) << i << " " << j;
+      ASSERT_EQ(p[1], want >> 8 & 0xff) << i << " " << j;
+      ASSERT_EQ(p[2], want & 0xff) << i << " " << j;
+    }
+  }
+}
+
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

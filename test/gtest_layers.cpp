@@ -55,6 +55,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/world_services.h", "ros"},
     {"se3_sim/gazebo_tags.h", "model"},
     {"se3_sim/laser.h", "collision"},
+    {"se3_sim/laser_world.h", "sim"},
     {"se3_sim/render/camera_sensor.h", "render"},
     {"se3_sim/world.h", "sim"},
 };

@@ -240,6 +240,14 @@ TEST(RenderAlloc, CameraSensorFramesAllocateNothing) {
     const SE3 moved(look * optical_in_body(), eye.p + Vec3(0, 0.05 * k, 0));
     EXPECT_EQ(allocations_of([&] { cam.render(moved, d.oMb, objects); }), 0) << "frame " << k;
   }
+  // Depth alone, and colour again (the background redrawn), allocate nothing either.
+  for (int k = 0; k < 4; ++k) {
+    cam.set_color(k % 2 == 1);
+    EXPECT_EQ(
+        allocations_of([&] { cam.render(SE3(look * optical_in_body(), eye.p), d.oMb, objects); }),
+        0)
+        << "depth-only frame " << k;
+  }
   int hits = 0;
   for (float z : cam.depth()) hits += std::isfinite(z);
   EXPECT_GT(hits, 1000);

@@ -103,6 +103,9 @@ struct Style {
   Eigen::Vector3d light = Eigen::Vector3d(0.35, -0.45, 0.82);  ///< towards the sun (world)
   bool simd = true;  ///< SSE2 raster path where built (the scalar one gives the same image)
   int threads = 1;   ///< 1 or 2: rows shared between this many threads
+  /// Colours (sky, ground, grid, shaded triangles); false: the depth buffer alone is drawn (a
+  /// depth camera whose colour nobody reads), the same depth bits, the colour buffer stale.
+  bool paint = true;
 };
 
 /// A triangle mesh as the rasterizer reads it: structure-of-arrays positions and unit normals

@@ -109,7 +109,7 @@ struct Renderer::Impl {
   bool background_ok = false;
   Mat4 background_P = Mat4::Zero();
   Vec3 background_eye = Vec3::Zero();
-  double background_grid[3] = {0, 0, 0};
+  double background_grid[4] = {0, 0, 0, 0};
   DirtyTiles dirty, next_dirty;
 
   // Lighting (ambient, sun, head light).

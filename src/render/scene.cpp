@@ -101,6 +101,7 @@ void Renderer::draw_mesh(const RenderMesh& mesh, const SE3& pose, const Vec3& sc
   if (!I.prepare(mesh, pose, scale, cam_, planes_, style_.light, 0, f)) return;
   I.next_dirty.add(f.rect);
   fb_.set_simd(style_.simd);
+  fb_.set_paint(style_.paint);
   I.transform(mesh, 0, mesh.vertex_count(), f, cam_, style_.simd);
   float c[3];
   if (rgb) {
@@ -370,11 +371,16 @@ void Renderer::frame_part(int phase, int part, int parts) {
           for (int y = t << DirtyTiles::kShift; y < y1; ++y) {
             if (!rows.has(y)) continue;
             const std::size_t at = std::size_t(y) * W + x0;
-            std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(x1 - x0) * 4);
+            if (style_.paint)
+              std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(x1 - x0) * 4);
             std::memset(fb_.depth() + at, 0, std::size_t(x1 - x0) * 4);
           }
           a = b;
         }
+      }
+    } else if (!style_.paint) {
+      for (int y = 0; y < fb_.height(); ++y) {
+        if (rows.has(y)) fb_.clear_depth_rows(y, y + 1);
       }
     } else {
       background_rows(rows);
@@ -416,6 +422,7 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
                       const Overlay& overlay) {
   Impl& I = *impl_;
   fb_.set_simd(style_.simd);
+  fb_.set_paint(style_.paint);
   std::swap(I.dirty, I.next_dirty);  // no allocation: the two buffers trade places
   if (I.next_dirty.mark.size() != npix_tiles(fb_.width(), fb_.height())) {
     I.dirty.resize(fb_.width(), fb_.height());  // first frame or a new size: all redrawn
@@ -424,18 +431,18 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
   }
   I.next_dirty.clear();
   // The cached background serves while camera and grid are as when it was drawn.
-  const double grid_sig[3] = {style_.grid ? 1.0 : 0.0, style_.grid_spacing,
-                              double(style_.grid_lines)};
+  const double grid_sig[4] = {style_.grid ? 1.0 : 0.0, style_.grid_spacing,
+                              double(style_.grid_lines), style_.paint ? 1.0 : 0.0};
   const std::size_t npix = std::size_t(fb_.width()) * fb_.height();
   if (I.background.size() != npix || I.background_P != cam_.P || I.background_eye != cam_.eye ||
-      !std::equal(grid_sig, grid_sig + 3, I.background_grid)) {
+      !std::equal(grid_sig, grid_sig + 4, I.background_grid)) {
     I.background_ok = false;
   }
   if (!I.background_ok) {
     I.background.resize(npix);  // allocates only when the image size changes
     I.background_P = cam_.P;
     I.background_eye = cam_.eye;
-    std::copy(grid_sig, grid_sig + 3, I.background_grid);
+    std::copy(grid_sig, grid_sig + 4, I.background_grid);
   }
   // Item transforms (serial: a few matrix products each).
   std::size_t vbase = 0;

@@ -79,6 +79,7 @@ struct Target {
   uint32_t* color;
   float* depth;
   RowSet rows;
+  bool paint = true;  ///< colours too (else depth only)
 };
 
 // The pixel loops. Row by row: edge values step by ey, the planes' row values by zy and ky
@@ -102,7 +103,7 @@ void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
       const float z = zr + s.zx * fi;
       if (z > drow[i]) {
         drow[i] = z;
-        crow[i] = shade(rgb, kr + s.kx * fi);
+        if (T.paint) crow[i] = shade(rgb, kr + s.kx * fi);
       }
     }
   }
@@ -112,7 +113,7 @@ void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
 // Four pixels at columns x .. x + 3 (relative column ii) of a row: edge lanes e, planes' row
 // values zr, kr.
 inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __m128 kr, __m128 zx,
-                       __m128 kx, const __m128 c[3], uint32_t* crow, float* drow) {
+                       __m128 kx, const __m128 c[3], uint32_t* crow, float* drow, bool paint) {
   const __m128i outside = _mm_srai_epi32(_mm_or_si128(_mm_or_si128(e0, e1), e2), 31);
   const __m128 fi = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(ii), _mm_setr_epi32(0, 1, 2, 3)));
   const __m128 z = _mm_add_ps(zr, _mm_mul_ps(zx, fi));
@@ -120,6 +121,7 @@ inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __
   const __m128 m = _mm_andnot_ps(_mm_castsi128_ps(outside), _mm_cmpgt_ps(z, d));
   if (!_mm_movemask_ps(m)) return;
   _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+  if (!paint) return;
   const __m128 k = _mm_add_ps(kr, _mm_mul_ps(kx, fi));
   const __m128 c255 = _mm_set1_ps(255.0f);
   const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[0], k), c255));
@@ -171,7 +173,7 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
       }
       for (; i <= i1; i += 4, e0 = _mm_add_epi32(e0, ex4[0]), e1 = _mm_add_epi32(e1, ex4[1]),
                               e2 = _mm_add_epi32(e2, ex4[2])) {
-        group_sse2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+        group_sse2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i, T.paint);
       }
     } else {
       for (int i = i0 & ~3; i <= i1; i += 4) {
@@ -179,7 +181,7 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
         const __m128i e0 = _mm_add_epi32(ev[0], _mm_set1_epi32(ii * s.ex[0]));
         const __m128i e1 = _mm_add_epi32(ev[1], _mm_set1_epi32(ii * s.ex[1]));
         const __m128i e2 = _mm_add_epi32(ev[2], _mm_set1_epi32(ii * s.ex[2]));
-        group_sse2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+        group_sse2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii, T.paint);
       }
     }
   }
@@ -191,7 +193,7 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
 // W >= 8.
 SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m256 zr, __m256 kr,
                                 __m256 zx, __m256 kx, const __m256 c[3], uint32_t* crow,
-                                float* drow) {
+                                float* drow, bool paint) {
   const __m256i outside = _mm256_srai_epi32(_mm256_or_si256(_mm256_or_si256(e0, e1), e2), 31);
   const __m256 fi = _mm256_cvtepi32_ps(
       _mm256_add_epi32(_mm256_set1_epi32(ii), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
@@ -200,6 +202,7 @@ SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m2
   const __m256 m = _mm256_andnot_ps(_mm256_castsi256_ps(outside), _mm256_cmp_ps(z, d, _CMP_GT_OQ));
   if (!_mm256_movemask_ps(m)) return;
   _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
+  if (!paint) return;
   const __m256 k = _mm256_add_ps(kr, _mm256_mul_ps(kx, fi));
   const __m256 c255 = _mm256_set1_ps(255.0f);
   const __m256i r = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[0], k), c255));
@@ -239,7 +242,7 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
                ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
                ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
         group_avx2(ev[0], ev[1], ev[2], 0, _mm256_set1_ps(zrs), _mm256_set1_ps(krs), zx, kx, c,
-                   crow, drow);
+                   crow, drow, T.paint);
       }
       return;
     }
@@ -247,9 +250,10 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
              ev[0] = _mm256_add_epi32(ev[0], eyv[0]), ev[1] = _mm256_add_epi32(ev[1], eyv[1]),
              ev[2] = _mm256_add_epi32(ev[2], eyv[2])) {
       const __m256 zr = _mm256_set1_ps(zrs), kr = _mm256_set1_ps(krs);
-      group_avx2(ev[0], ev[1], ev[2], 0, zr, kr, zx, kx, c, crow, drow);
+      group_avx2(ev[0], ev[1], ev[2], 0, zr, kr, zx, kx, c, crow, drow, T.paint);
       group_avx2(_mm256_add_epi32(ev[0], ex8[0]), _mm256_add_epi32(ev[1], ex8[1]),
-                 _mm256_add_epi32(ev[2], ex8[2]), 8, zr, kr, zx, kx, c, crow + 8, drow + 8);
+                 _mm256_add_epi32(ev[2], ex8[2]), 8, zr, kr, zx, kx, c, crow + 8, drow + 8,
+                 T.paint);
     }
     return;
   }
@@ -274,7 +278,7 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
       }
       for (; i <= i1; i += 8, e0 = _mm256_add_epi32(e0, ex8[0]), e1 = _mm256_add_epi32(e1, ex8[1]),
                               e2 = _mm256_add_epi32(e2, ex8[2])) {
-        group_avx2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i);
+        group_avx2(e0, e1, e2, i, zr, kr, zx, kx, c, crow + i, drow + i, T.paint);
       }
     } else {
       for (int i = i0 & ~7; i <= i1; i += 8) {
@@ -282,7 +286,7 @@ SE3_AVX2 void raster_avx2(const Setup& s, const float rgb[3], const Target& T) {
         const __m256i e0 = _mm256_add_epi32(ev[0], _mm256_set1_epi32(ii * s.ex[0]));
         const __m256i e1 = _mm256_add_epi32(ev[1], _mm256_set1_epi32(ii * s.ex[1]));
         const __m256i e2 = _mm256_add_epi32(ev[2], _mm256_set1_epi32(ii * s.ex[2]));
-        group_avx2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii);
+        group_avx2(e0, e1, e2, ii, zr, kr, zx, kx, c, crow + ii, drow + ii, T.paint);
       }
     }
   }
@@ -318,7 +322,7 @@ void small_covered(const Small& q, unsigned covered, const float rgb[3], const T
       const std::size_t at = std::size_t(y) * T.W + q.bx0 + i;
       if (z > T.depth[at]) {
         T.depth[at] = z;
-        T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
+        if (T.paint) T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
       }
     }
   }
@@ -391,6 +395,7 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
     const __m128 m = _mm_and_ps(in, _mm_cmpgt_ps(z, d));
     if (!_mm_movemask_ps(m)) continue;
     _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+    if (!T.paint) continue;
     const __m128 k =
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, uc), _mm_mul_ps(ff1, ua)), _mm_mul_ps(ff2, ub));
     const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[0]), k), c255));
@@ -476,6 +481,11 @@ SE3_AVX2 void small_avx2(const Small& q, const float rgb[3],
     const unsigned mm = unsigned(_mm256_movemask_ps(m));
     if (!mm) continue;
     const __m256 dn = _mm256_blendv_ps(d, z, m);
+    if (!T.paint) {
+      if (mm & 15u) _mm_storeu_ps(d0, _mm256_castps256_ps128(dn));
+      if (mm > 15u) _mm_storeu_ps(d1, _mm256_extractf128_ps(dn, 1));
+      continue;
+    }
     const __m256 k = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
                                    _mm256_mul_ps(ff2, ub));
     const __m256i r =
@@ -972,14 +982,14 @@ int Framebuffer::usable_path() const {
 
 void Framebuffer::fill_triangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                                 const float rgb[3], const RowSet& rows) {
-  const Target T{width_, height_, color_.data(), depth_.data(), rows};
+  const Target T{width_, height_, color_.data(), depth_.data(), rows, paint_};
   draw_any(a, b, c, rgb, T, usable_path());
 }
 
 std::size_t Framebuffer::fill_indexed(const VertexArrays& v, const uint32_t* idx, std::size_t count,
                                       const float rgb[3], bool cull, bool outward,
                                       const RowSet& rows, ClipCallback clip, void* ctx) {
-  const Target T{width_, height_, color_.data(), depth_.data(), rows};
+  const Target T{width_, height_, color_.data(), depth_.data(), rows, paint_};
   switch (usable_path()) {
 #if SE3_RASTER_AVX2
     case 2:

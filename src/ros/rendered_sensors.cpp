@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "se3_sim/laser.h"
+#include "se3_sim/laser_world.h"
 #include "se3_sim/render/camera_sensor.h"
 #include "se3_sim/ros/convert.h"
 
@@ -30,20 +31,15 @@ std::string join_topic(const std::string& ns, const std::string& name) {
   return ns + "/" + name;
 }
 
-std::string sensor_where(const se3::SensorSpec& s) {
-  return "sensor '" + s.name + "'" + (s.where.empty() ? "" : " (" + s.where + ")");
+// A scene object as cameras draw it, on frame `body`.
+se3::render::DrawItem object_item(const se3::SceneObject& o, int body) {
+  const Eigen::Vector3f rgb =
+      o.material.has_color ? o.material.rgba.head<3>() : Eigen::Vector3f(0.7f, 0.7f, 0.7f);
+  return se3::render::shape_item(o.shape, rgb, body, o.name);
 }
 
-// A frame whose z axis is the unit normal n, at n * offset.
-se3::SE3 plane_frame(const se3::Vec3& normal, double offset) {
-  const se3::Vec3 z = normal.normalized();
-  const se3::Vec3 helper = std::abs(z.x()) < 0.9 ? se3::Vec3::UnitX() : se3::Vec3::UnitY();
-  const se3::Vec3 x = helper.cross(z).normalized();
-  se3::Mat3 R;
-  R.col(0) = x;
-  R.col(1) = z.cross(x);
-  R.col(2) = z;
-  return se3::SE3(R, offset * z);
+std::string sensor_where(const se3::SensorSpec& s) {
+  return "sensor '" + s.name + "'" + (s.where.empty() ? "" : " (" + s.where + ")");
 }
 
 }  // namespace
@@ -70,10 +66,19 @@ struct RenderedSensors::Impl {
     std::vector<char> due;
     double time = 0;
     bool full = false;
+    /// The world's objects changed (spawned, deleted): what cameras draw and lasers scan is
+    /// rebuilt from `objects` before this frame.
+    bool world_changed = false;
+    std::vector<se3::SceneObject> objects;
   };
 
   std::vector<Sensor> sensors;
   std::unique_ptr<se3::CollisionModel> collision;  ///< for lasers
+  std::vector<se3::render::DrawItem> robot_items;  ///< the robot's visuals (cameras)
+  se3::GeometryModel geometry;                     ///< the robot's collisions (lasers)
+  se3::ConstraintSpec ground;                      ///< the scene's ground (lasers)
+  bool any_camera = false, any_laser = false;
+  std::uint64_t generation = ~std::uint64_t(0);  ///< Simulator::world_generation shown
   std::vector<geometry_msgs::TransformStamped> tfs;
   bool use_sim_time = false;
   bool wait = false;
@@ -89,7 +94,9 @@ struct RenderedSensors::Impl {
   std::thread thread;
 
   void loop();
-  void publish(const Frame& f);
+  /// Cameras' items and the lasers' collision model for these objects (allocates).
+  void set_objects(const std::vector<se3::SceneObject>& objects);
+  void publish(Frame& f);
   void publish_camera(Sensor& s, const Frame& f, const ros::Time& stamp);
   void publish_scan(Sensor& s, const Frame& f, const ros::Time& stamp);
 };
@@ -106,58 +113,18 @@ RenderedSensors::RenderedSensors(ros::NodeHandle& nh, const se3::Scene& scene,
   const int nobj = int(scene.objects.size());
   const bool ground = scene.constraints.ground;
 
-  // What cameras draw: the robot's visuals, then each object as an item on its own pose.
-  std::vector<se3::render::DrawItem> items;
-  bool any_camera = false, any_laser = false;
+  // What cameras draw: the robot's visuals, then each object as an item on its own pose; what
+  // lasers scan: the collision layer's shapes (set_objects, again when the objects change).
   for (const se3::SensorSpec& s : specs) {
-    any_camera = any_camera || s.type != se3::SensorType::Ray;
-    any_laser = any_laser || s.type == se3::SensorType::Ray;
+    I.any_camera = I.any_camera || s.type != se3::SensorType::Ray;
+    I.any_laser = I.any_laser || s.type == se3::SensorType::Ray;
   }
-  if (any_camera) {
-    items = se3::render::make_draw_items(model, geometry);
-    for (int j = 0; j < nobj; ++j) {
-      const se3::SceneObject& o = scene.objects[j];
-      se3::render::DrawItem it;
-      it.body = I.nbodies + j;
-      it.name = it.link = o.name;
-      it.shape = o.shape.type;
-      const Eigen::Vector3f rgb =
-          o.material.has_color ? o.material.rgba.head<3>() : Eigen::Vector3f(0.7f, 0.7f, 0.7f);
-      it.color = rgb.cast<double>();
-      it.mesh = std::make_shared<se3::render::RenderMesh>(
-          se3::render::make_render_mesh(se3::tessellate(o.shape), se3::Vec3::Ones(), rgb));
-      items.push_back(std::move(it));
-    }
-  }
-  if (any_laser) {
-    std::vector<se3::CollisionObject> objs;
-    for (const se3::GeometryObject& g : geometry.collisions) {
-      if (g.stand_in) continue;
-      se3::CollisionObject c;
-      c.name = g.name;
-      c.link = g.link;
-      c.frame = g.body;
-      c.placement = g.placement;
-      c.shape = g.shape;
-      objs.push_back(c);
-    }
-    for (int j = 0; j < nobj; ++j) {
-      se3::CollisionObject c;
-      c.name = scene.objects[j].name;
-      c.frame = I.nbodies + j;
-      c.shape = scene.objects[j].shape;
-      c.group = 1;
-      objs.push_back(c);
-    }
-    if (ground) {
-      se3::CollisionObject c;
-      c.name = "ground";
-      c.halfspace = true;
-      c.group = 1;
-      c.placement = plane_frame(scene.constraints.ground_normal, scene.constraints.ground_offset);
-      objs.push_back(c);
-    }
-    I.collision = std::make_unique<se3::CollisionModel>(objs, se3::CollisionOptions());
+  if (I.any_camera) I.robot_items = se3::render::make_draw_items(model, geometry);
+  if (I.any_laser) {
+    I.geometry.collisions = geometry.collisions;
+    I.ground = scene.constraints;
+    I.collision = std::make_unique<se3::CollisionModel>(
+        se3::laser_world(I.geometry, I.nbodies, scene.objects, I.ground), se3::CollisionOptions());
   }
 
   image_transport::ImageTransport it(nh);
@@ -212,7 +179,6 @@ RenderedSensors::RenderedSensors(ros::NodeHandle& nh, const se3::Scene& scene,
         throw se3::SensorError(sensor_where(s) + ": " + err);
       }
       x.camera = std::make_unique<se3::render::CameraSensor>(cs);
-      x.camera->set_items(items);
       const se3::render::CameraIntrinsics& k = x.camera->intrinsics();
       x.info.width = k.width;
       x.info.height = k.height;
@@ -284,6 +250,13 @@ RenderedSensors::RenderedSensors(ros::NodeHandle& nh, const se3::Scene& scene,
     }
     I.sensors.push_back(std::move(x));
   }
+  if (I.any_camera) {
+    std::vector<se3::render::DrawItem> items = I.robot_items;
+    for (int j = 0; j < nobj; ++j) items.push_back(object_item(scene.objects[j], I.nbodies + j));
+    for (Impl::Sensor& x : I.sensors) {
+      if (x.camera) x.camera->set_items(items);
+    }
+  }
   for (Impl::Frame* f : {&I.pending, &I.work}) {
     f->poses.assign(I.nbodies + nobj, se3::SE3());
     f->due.assign(I.sensors.size(), 0);
@@ -327,8 +300,16 @@ void RenderedSensors::after_step(se3::Simulator& sim) {
   sim.link_poses(I.links);  // computes body_poses() too
   const std::vector<se3::SE3>& oMb = sim.body_poses();
   Impl::Frame& f = I.pending;
-  for (int b = 0; b < I.nbodies && b < int(oMb.size()); ++b) f.poses[b] = oMb[b];
   const std::vector<se3::ObjectState>& objs = sim.objects();
+  if (sim.world_generation() != I.generation) {
+    // Objects spawned or deleted: the thread rebuilds what it draws before this frame (a frame
+    // replaced before it was taken passes the change on). Allocates, on a change only.
+    I.generation = sim.world_generation();
+    f.objects = sim.object_specs();
+    f.world_changed = true;
+  }
+  if (f.poses.size() != I.nbodies + objs.size()) f.poses.resize(I.nbodies + objs.size());
+  for (int b = 0; b < I.nbodies && b < int(oMb.size()); ++b) f.poses[b] = oMb[b];
   for (std::size_t j = 0; j < objs.size() && I.nbodies + j < f.poses.size(); ++j) {
     f.poses[I.nbodies + j] = objs[j].pose;
   }
@@ -368,7 +349,46 @@ void RenderedSensors::Impl::loop() {
   }
 }
 
-void RenderedSensors::Impl::publish(const Frame& f) {
+void RenderedSensors::reset() {
+  Impl& I = *impl_;
+  std::unique_lock<std::mutex> lock(I.mu);
+  // A frame of the state before the reset is not published after it; the one being drawn is
+  // finished first, then every sensor's noise restarts from its seed.
+  if (I.pending.full) {
+    I.pending.full = false;
+    for (char& d : I.pending.due) d = 0;
+  }
+  I.cv.wait(lock, [&] { return !I.busy; });
+  for (Impl::Sensor& s : I.sensors) s.rng.seed(se3::SensorSet::seed_of(s.spec.name));
+  lock.unlock();
+  I.cv.notify_all();  // a flush() waiting for the dropped frame
+}
+
+void RenderedSensors::Impl::set_objects(const std::vector<se3::SceneObject>& objects) {
+  if (any_camera) {
+    std::vector<se3::render::DrawItem> items = robot_items;
+    for (std::size_t j = 0; j < objects.size(); ++j) {
+      items.push_back(object_item(objects[j], nbodies + int(j)));
+    }
+    for (Sensor& s : sensors) {
+      if (s.camera) s.camera->set_items(items);
+    }
+  }
+  if (any_laser) {
+    auto model = std::make_unique<se3::CollisionModel>(
+        se3::laser_world(geometry, nbodies, objects, ground), se3::CollisionOptions());
+    for (Sensor& s : sensors) {
+      if (s.laser) s.laser = std::make_unique<se3::LaserScanner>(*model, s.spec.ray);
+    }
+    collision = std::move(model);
+  }
+}
+
+void RenderedSensors::Impl::publish(Frame& f) {
+  if (f.world_changed) {
+    set_objects(f.objects);
+    f.world_changed = false;
+  }
   const ros::Time stamp = use_sim_time ? ros::Time(f.time) : ros::Time::now();
   for (std::size_t i = 0; i < sensors.size(); ++i) {
     if (!f.due[i]) continue;
@@ -385,10 +405,18 @@ void RenderedSensors::Impl::publish_camera(Sensor& s, const Frame& f, const ros:
   const se3::SE3 body = s.body == se3::GeometryObject::kWorld ? se3::SE3() : f.poses[s.body];
   const se3::SE3 oMc = body * s.in_body;
   if (!oMc.R.allFinite() || !oMc.p.allFinite()) return;  // never a frame from a broken pose
+  // A depth camera draws colour only for someone: the image's or the cloud's subscribers
+  // (the depth is the same bits either way).
+  if (s.depth_pub) {
+    s.camera->set_color(s.image_pub.getNumSubscribers() > 0 ||
+                        s.points_pub.getNumSubscribers() > 0);
+  }
   s.camera->render(oMc, f.poses);
   const se3::SensorNoise& n = s.spec.noise;
   const std::vector<uint8_t>& rgb = s.camera->rgb();
-  if (n.any()) {
+  if (!s.camera->color()) {
+    // Nobody reads the colour image: only its CameraInfo goes out.
+  } else if (n.any()) {
     // Gaussian noise on the intensities (as Gazebo's camera noise: stddev in [0, 1] units).
     std::normal_distribution<double> g(n.mean, n.stddev);
     for (std::size_t k = 0; k < rgb.size(); ++k) {
@@ -400,7 +428,7 @@ void RenderedSensors::Impl::publish_camera(Sensor& s, const Frame& f, const ros:
   }
   s.image.header.stamp = stamp;
   s.info.header.stamp = stamp;
-  s.image_pub.publish(s.image);
+  if (s.camera->color()) s.image_pub.publish(s.image);
   s.info_pub.publish(s.info);
   if (!s.depth_pub) return;
   const std::vector<float>& depth = s.camera->depth();

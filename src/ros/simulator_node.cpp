@@ -604,6 +604,7 @@ void SimulatorNodeImpl::setup_world_services() {
   h.after_reset = [this](bool) {
     if (request_.active) end_step_request(false, "interrupted by simulator/reset_simulation");
     if (sensors_) sensors_->reset();
+    if (rendered_) rendered_->reset();
     status_.clear();
     anchor_ = Clock::now();
     anchored_ = 0;
@@ -846,6 +847,7 @@ bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger:
   if (request_.active) end_step_request(false, "interrupted by simulator/reset");
   sim_->reset();
   if (sensors_) sensors_->reset();
+  if (rendered_) rendered_->reset();
   status_.clear();
   anchor_ = Clock::now();
   anchored_ = 0;

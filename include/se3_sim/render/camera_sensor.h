@@ -21,10 +21,15 @@
 // optical frame (metres; NaN x y z where the depth is NaN) and the pixel's colour as
 // sensor_msgs/PointCloud2's packed "rgb" float (the bits 0x00RRGGBB): a PointCloud2 with
 // point_step 16 is a copy of cloud().
+//
+// The image is the sky, the ground plane and what stands on it (no grid lines, no overlay).
+// A depth camera can skip colour (CameraSensorSpec::color, set_color): the rasterizer then
+// writes depth alone.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "se3_sim/render.h"
@@ -40,6 +45,9 @@ struct CameraSensorSpec {
   double far = 10.0;    ///< m
   bool depth = true;    ///< depth image and cloud too (else RGB only)
   bool ground = true;   ///< the ground plane z = 0 returns depth
+  /// The rgb image and the cloud's colour; false (with depth): depth and cloud alone, nothing
+  /// shaded (the same depth and points, bit for bit; the cloud's rgb 0).
+  bool color = true;
 };
 
 /// CameraInfo's matrices (row-major) for an image of width x height.
@@ -61,12 +69,22 @@ Mat3 optical_in_body();
 /// false *error names the field.
 bool check_camera_spec(const CameraSensorSpec& spec, std::string* error);
 
+/// The draw item of a shape (a scene object's: tessellated, in one colour rgb in [0, 1]) on
+/// frame `body`, drawn at render()'s oMb[body] (the simulator's objects follow its bodies:
+/// object j of Simulator::object_specs() on frame model.n + 1 + j, at its pose in objects()).
+DrawItem shape_item(const Shape& shape, const Eigen::Vector3f& rgb, int body,
+                    const std::string& name);
+
 class CameraSensor {
  public:
   /// Allocates every buffer (spec must pass check_camera_spec; bad values are clamped).
   explicit CameraSensor(const CameraSensorSpec& spec);
   const CameraSensorSpec& spec() const { return spec_; }
   const CameraIntrinsics& intrinsics() const { return intr_; }
+  /// Whether the next frames draw colour (rgb() and the cloud's rgb); ignored without depth
+  /// (an RGB camera always draws colour). rgb() keeps its last colour frame while off.
+  void set_color(bool on) { color_ = on || !spec_.depth; }
+  bool color() const { return color_; }
 
   /// What is drawn (allocates; not per frame).
   void set_items(std::vector<DrawItem> items) { renderer_.set_items(std::move(items)); }
@@ -95,6 +113,7 @@ class CameraSensor {
   std::vector<uint8_t> rgb_;
   std::vector<float> depth_, cloud_;
   std::vector<float> columns_;  ///< (i - cx) / fx per column
+  bool color_ = true;
 };
 
 }  // namespace render

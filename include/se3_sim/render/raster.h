@@ -98,6 +98,10 @@ class Framebuffer {
   /// One path (at most raster_best_path(); narrower images fall back to narrower paths).
   void set_path(RasterPath p);
   RasterPath path() const { return path_; }
+  /// Whether triangles write colour (default) or depth alone (a depth camera nobody watches in
+  /// colour): the depth is the same either way.
+  void set_paint(bool on) { paint_ = on; }
+  bool paint() const { return paint_; }
 
   /// Depth to 0 (everything infinitely far).
   void clear_depth();
@@ -140,6 +144,7 @@ class Framebuffer {
  private:
   int width_ = 0, height_ = 0;
   RasterPath path_ = raster_best_path();
+  bool paint_ = true;
   int usable_path() const;
   std::vector<uint32_t> color_;
   std::vector<float> depth_;

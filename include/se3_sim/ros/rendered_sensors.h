@@ -43,6 +43,10 @@ class RenderedSensors {
   void after_step(se3::Simulator& sim);
   /// Waits until every frame handed over has been published.
   void flush();
+  /// After Simulator::reset, under the simulator's lock: a frame not yet taken is dropped, and
+  /// the cameras' and lasers' noise restarts from its seeds (a run after a reset repeats the
+  /// images and scans bit for bit).
+  void reset();
   /// Sensor frames replaced before the thread took them.
   long dropped() const;
 
