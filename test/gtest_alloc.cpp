@@ -379,6 +379,20 @@ TEST(Alloc, StepsAfterASpawnOrDeleteAllocateNothing) {
   EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
 }
 
+// Several robots (sim.h add_robot): the shipped two_arms scene without its table and box (the
+// UR5's mesh contact with them allocates inside FCL whether or not the Panda is there), both
+// arms under their trajectory controllers and commands: the steps allocate nothing.
+TEST(Alloc, SeveralRobotsStepsAllocateNothing) {
+  Scene scene = load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/two_arms.yaml");
+  scene.objects.clear();
+  auto sim = make_simulator(scene);
+  ASSERT_EQ(sim->robot_count(), 2);
+  sim->set_robot_joint_effort(1, 2, 5.0);
+  sim->set_robot_joint_effort(0, 1, 5.0);
+  ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+}
+
 // A trajectory controller (quintic segments, the effort flavour) on the UR5 and a velocity
 // controller through the velocity interface: sampling the splines, the PIDs and the tolerance
 // checks allocate nothing in a step.

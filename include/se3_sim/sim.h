@@ -99,6 +99,14 @@ struct Scene {
   /// `sensors:` (sensors.h), in file order; the URDF's Gazebo sensor tags are not in it
   /// (scene_sensors adds them).
   std::vector<SensorSpec> sensors;
+  /// `robots:` (docs/multi_robot.md): a list of robots, each a map of name, urdf, namespace,
+  /// base, base_pose, base_twist, initial_positions, initial_velocities, locked_joints,
+  /// controllers, srdf, self_collision, joint_limits. The first is the scene's robot (its
+  /// keys land in the fields above, as `robot:` would set them); the others are in
+  /// extra_robots, each a Scene with only those keys set. Not with `robot:`.
+  std::string robot_name;       ///< a `robots:` entry's name ("": the model's name)
+  std::string robot_namespace;  ///< a `robots:` entry's namespace ("" = none)
+  std::vector<Scene> extra_robots;
 };
 
 /// Reads a scene file (at most limits::kMaxSceneBytes). Throws SceneError.
@@ -316,6 +324,41 @@ class Simulator {
   std::uint64_t fast_steps() const { return fast_steps_; }
   const std::string& fast_step_warning() const { return fast_step_warning_; }
 
+  // ---- several robots (src/sim/robots.cpp, docs/multi_robot.md). Robot 0 is the one of
+  // model(), state(), set_joint_effort() and the rest above; robots 1.. are added beside it,
+  // each with its own state, integrator (the simulator's), commands, controllers and joint
+  // limits, stepped in every step() before robot 0. They do not touch each other or the
+  // objects yet (no contact rows between systems of different robots).
+  /// Adds a robot; returns its index (robot_count() - 1). Throws std::invalid_argument (nothing
+  /// changed) for a name in use or not a frame name, a state that does not fit the model or is
+  /// not finite, and ControllerError for a bad controller.
+  int add_robot(const std::string& name, const std::string& ns, Model model, const State& initial,
+                const std::vector<ControllerSpec>& controllers = {}, bool joint_limits = true);
+  int robot_count() const { return 1 + static_cast<int>(extra_.size()); }
+  /// -1 when no robot has this name.
+  int robot_index(const std::string& name) const;
+  const Model& robot_model(int k) const;
+  const State& robot_state(int k) const;
+  const std::string& robot_name(int k) const;
+  const std::string& robot_namespace(int k) const;
+  /// set_joint_effort of robot k (the effort limits of its model). Throws std::out_of_range for
+  /// a bad robot or joint index, std::invalid_argument for a non-finite effort.
+  double set_robot_joint_effort(int k, int i, double effort);
+  /// set_base_wrench of robot k (ignored for a fixed base; throws for a non-finite wrench).
+  void set_robot_base_wrench(int k, const Vec6& wrench);
+  /// Robot k's actuation of the last step (size nv): as actuation() for robot 0.
+  const VecX& robot_actuation(int k) const;
+  /// set_state of robot k (same checks).
+  void set_robot_state(int k, const State& s);
+  /// Robot k's controllers (nullptr without); replaced by set_robot_controllers.
+  ControllerSet* robot_controllers(int k);
+  void set_robot_controllers(int k, const std::vector<ControllerSpec>& specs);
+  /// World pose of every entry of robot k's Model::links, into out.
+  void robot_link_poses(int k, std::vector<SE3>& out);
+  /// Robot k's world spatial momentum and kinetic energy.
+  Vec6 robot_momentum(int k);
+  double robot_kinetic_energy(int k);
+
   // ---- world interface (world.h, src/sim/world.cpp; docs/design.md "World interface"). Models
   // are the robot (when the simulator has one: a scene of objects alone has none) and the
   // objects, by name. Objects are spawned and deleted in two parts: prepare_* builds everything
@@ -483,6 +526,28 @@ class Simulator {
   /// The edit that replaces the objects by `specs` (kept ones by name keep their states).
   WorldEditPtr prepare_objects(std::vector<SceneObject> specs) const;
 
+  /// Robots 1.. (robot 0 is in the members below): each stepped by its own stepper, with its
+  /// own joint-limit constraints.
+  struct ExtraRobot {
+    std::string name, ns;
+    std::unique_ptr<Model> model;
+    std::unique_ptr<Stepper> stepper;
+    std::unique_ptr<ConstraintSystem> constraints, constraints_start;
+    std::unique_ptr<ControllerSet> controllers;
+    State initial, state, last_good;
+    VecX command, actuation;
+    Data diag;
+    explicit ExtraRobot(const Model& m) : diag(m) {}
+  };
+  /// Steps robots 1..; false (every extra robot back at its last good state, failure_ set) when
+  /// one fails.
+  bool step_extra_robots();
+  void reset_extra_robots();
+  /// Rolls robots 1.. back to their last good states.
+  void roll_back_extra_robots();
+  ExtraRobot& extra(int k) const;
+  std::vector<std::unique_ptr<ExtraRobot>> extra_;
+
   std::string robot_name_, robot_ns_;
   std::uint64_t world_generation_ = 0, spawned_ = 0, deleted_ = 0;
   std::unique_ptr<Model> model_;
@@ -562,6 +627,9 @@ bool uses_scene_collision(const Scene& scene);
 /// (joint limits on unless the scene turns them off), objects, the scene collision (when
 /// uses_scene_collision) and controllers.
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml = "");
+/// Adds the scene's robots 1.. (Scene::extra_robots) to sim (make_simulator does). Throws
+/// SceneError naming the scene and the `robots:` entry (a name in use, a bad controller).
+void add_scene_robots(Simulator& sim, const Scene& scene);
 
 // ------------------------------------------------------------------ `se3_dyn simulate`
 /// Options of a headless run (the command line's `simulate`).

@@ -41,6 +41,7 @@
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/rendered_sensors.h"
+#include "se3_sim/ros/robot_interfaces.h"
 #include "se3_sim/ros/world_services.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
@@ -272,6 +273,8 @@ class SimulatorNodeImpl {
   std::string urdf_xml_;
   std::unique_ptr<WorldServices> world_;  ///< simulator/spawn_entity etc., model_states
   void setup_world_services();
+  /// The scene's robots 1.. (robot_interfaces.h): their topics under their namespaces.
+  std::unique_ptr<RobotInterfaces> robots_;
 };
 
 // ------------------------------------------------------------------ setup
@@ -520,6 +523,21 @@ bool SimulatorNodeImpl::init() {
   for (geometry_msgs::TransformStamped t : sensor_tfs_) {
     t.header.stamp = ros::Time::now();
     fixed.push_back(t);
+  }
+  if (sim_->robot_count() > 1) {
+    try {
+      robots_ = std::make_unique<RobotInterfaces>(
+          nh_, *sim_, scene_, world_frame_, max_effort_, max_wrench_,
+          [this](const std::function<void(se3::Simulator&)>& f) {
+            std::lock_guard<TurnMutex> lock(mu_);
+            f(*sim_);
+          });
+    } catch (const std::exception& e) {
+      ROS_FATAL("simulator: %s", e.what());
+      return false;
+    }
+    const auto more = robots_->static_transforms(ros::Time::now());
+    fixed.insert(fixed.end(), more.begin(), more.end());
   }
   if (!fixed.empty()) tf_static_->sendTransform(fixed);
 
@@ -1205,6 +1223,7 @@ void SimulatorNodeImpl::publish_state() {
   joint_pub_.publish(js_);
   tf_->sendTransform(tfs_);
   chain_pub_.publish(cs_);
+  if (robots_) robots_->publish(*sim_, t, *tf_);
 }
 
 void SimulatorNodeImpl::publish_controller_states() {

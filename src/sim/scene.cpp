@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -233,6 +234,96 @@ std::string resolve_robot(const Scene& s, const std::string& base_dir) {
   throw SceneError(s.file + ": robot '" + s.robot + "' not found (tried " + list + ")");
 }
 
+// The keys of one `robots:` entry; those shared with the top level are read by scene_keys().
+const std::vector<std::string>& robot_entry_keys() {
+  static const std::vector<std::string> keys = {"name",
+                                                "urdf",
+                                                "namespace",
+                                                "base",
+                                                "base_pose",
+                                                "base_twist",
+                                                "initial_positions",
+                                                "initial_velocities",
+                                                "locked_joints",
+                                                "controllers",
+                                                "srdf",
+                                                "self_collision",
+                                                "joint_limits"};
+  return keys;
+}
+
+// The top-level keys that describe the one robot: with `robots:` they belong in its entries.
+bool is_robot_key(const std::string& key) {
+  for (const std::string& k : robot_entry_keys()) {
+    if (k == key && k != "name" && k != "urdf" && k != "namespace") return true;
+  }
+  return key == "robot";
+}
+
+// `robots: [{name, urdf, namespace, base, ...}, ...]`: each entry a Scene of its robot keys.
+std::vector<Scene> read_robots(const SceneReader& r, const Field& v, const std::string& base_dir) {
+  std::vector<Scene> out;
+  for (const Field& item : r.items(v, static_cast<std::size_t>(limits::kMaxBodies))) {
+    Scene e;
+    e.file = r.file();
+    bool has_urdf = false;
+    for (const Field& f : r.fields(item, robot_entry_keys())) {
+      if (f.name == "name") {
+        e.robot_name = r.text(f);
+        for (char c : e.robot_name) {
+          if (std::isspace(static_cast<unsigned char>(c)) || c == '/' || c == '#' || c == ':') {
+            r.fail(f, "'" + f.key + "' is not a frame name (no spaces, '/', '#' or ':')");
+          }
+        }
+        for (const Scene& o : out) {
+          if (o.robot_name == e.robot_name) {
+            r.fail(f, "'" + f.key + "': robot name '" + e.robot_name + "' is used twice");
+          }
+        }
+      } else if (f.name == "namespace") {
+        e.robot_namespace = r.text(f);
+        while (!e.robot_namespace.empty() && e.robot_namespace[0] == '/') {
+          e.robot_namespace.erase(0, 1);
+        }
+        for (char c : e.robot_namespace) {
+          if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/')) {
+            r.fail(f, "'" + f.key + "' is not a ROS name (letters, digits, '_' and '/')");
+          }
+        }
+      } else if (f.name == "urdf") {
+        e.robot = r.text(f);
+        has_urdf = true;
+      } else if (f.name == "srdf") {
+        e.srdf = read_scene_srdf(r, f, base_dir);
+      } else if (f.name == "joint_limits") {
+        e.constraints.joint_limits = r.boolean(f);
+        e.constraints.joint_limits_given = true;
+      } else {
+        for (const auto& k : scene_keys()) {
+          if (f.name == k.first) k.second(r, f, e);
+        }
+      }
+    }
+    if (!has_urdf) r.fail(item, "'" + item.key + "' needs urdf: (the robot's URDF file)");
+    if (e.robot.compare(0, 6, "chain:") == 0) {
+      r.fail(item, "'" + item.key + ".urdf' needs a URDF file (chain:N is the robot: key's)");
+    }
+    e.robot_path = resolve_robot(e, base_dir);
+    if (!e.constraints.joint_limits_given) e.constraints.joint_limits = true;
+    out.push_back(std::move(e));
+  }
+  if (out.empty()) r.fail(v, "'robots' needs at least one robot");
+  for (size_t i = 0; i < out.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (!out[i].robot_namespace.empty() && out[i].robot_namespace == out[j].robot_namespace) {
+        r.fail(v, "'robots[" + std::to_string(i) + "].namespace' '" + out[i].robot_namespace +
+                      "' is robots[" + std::to_string(j) + "]'s too");
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& base_dir,
@@ -245,9 +336,22 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
   known.push_back("objects");                                        // these two need base_dir
   known.push_back("srdf");
   known.push_back("sensors");
+  known.push_back("robots");
   Scene s;
   s.file = file_for_messages;
+  std::vector<Scene> robots;
+  int robots_line = 0, robot_key_line = 0;
+  std::string robot_key;
   for (const Field& f : r.fields(root, known)) {
+    if (f.name == "robots") {
+      robots = read_robots(r, f, base_dir);
+      robots_line = f.line;
+      continue;
+    }
+    if (robot_key.empty() && (is_robot_key(f.name) || f.name == "controllers")) {
+      robot_key = f.name;
+      robot_key_line = f.line;
+    }
     if (f.name == "objects") {
       read_scene_objects(r, f, base_dir, s.objects);
       continue;
@@ -271,6 +375,50 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     if (!done) parse_constraint_key(r, f, s.constraints);
   }
   if (!s.robot.empty()) s.robot_path = resolve_robot(s, base_dir);
+  if (!robots.empty()) {
+    if (!robot_key.empty()) {
+      r.fail(robot_key_line, "'" + robot_key + "' is a robot's key: with 'robots:' (line " +
+                                 std::to_string(robots_line) + ") it goes in a robots: entry");
+    }
+    // The first robot is the scene's robot, as `robot:` and its keys would set it; its topics
+    // and frames are the node's own (docs/ros.md "Several robots").
+    Scene& e = robots[0];
+    if (!e.robot_namespace.empty()) {
+      r.fail(robots_line, "'robots[0].namespace': the first robot is the node's own robot (its "
+                          "topics are the node's, its frames its bare link names); give the "
+                          "others namespaces");
+    }
+    s.robot = e.robot;
+    s.robot_path = e.robot_path;
+    s.floating = e.floating;
+    s.base_given = e.base_given;
+    s.base_pose = e.base_pose;
+    s.base_twist = e.base_twist;
+    s.initial_positions = e.initial_positions;
+    s.initial_velocities = e.initial_velocities;
+    s.locked_joints = e.locked_joints;
+    s.controllers = e.controllers;
+    s.srdf = e.srdf;
+    s.self_collision = e.self_collision;
+    s.robot_name = e.robot_name;
+    s.robot_namespace = e.robot_namespace;
+    if (e.constraints.joint_limits_given) {
+      s.constraints.joint_limits = e.constraints.joint_limits;
+      s.constraints.joint_limits_given = true;
+    }
+    for (size_t i = 1; i < robots.size(); ++i) {
+      robots[i].gravity = s.gravity;
+      robots[i].integrator = s.integrator;
+      robots[i].dt = s.dt;
+      for (const SceneObject& o : s.objects) {
+        if (o.name == robots[i].robot_name) {
+          throw SceneError(s.file + ": robots[" + std::to_string(i) + "].name '" + o.name +
+                           "' is an object's too");
+        }
+      }
+      s.extra_robots.push_back(std::move(robots[i]));
+    }
+  }
   if (s.name.empty()) s.name = s.robot;
   return s;
 }

@@ -188,6 +188,7 @@ void Simulator::reset() {
   W_ = W_checked_ = 0;
   passive_power_ = passive_power();
   reset_objects();
+  if (!extra_.empty()) reset_extra_robots();
 }
 
 void Simulator::refresh_reference() {
@@ -621,6 +622,7 @@ bool Simulator::energy_ok() {
 // Invariant between steps: last_good_ is the state, and time and step count are its.
 bool Simulator::step() {
   if (!failure_.empty()) return false;
+  if (!extra_.empty() && !step_extra_robots()) return false;
   const VecX& tau = step_forces();
   const int nv = model_->nv;
   const double P0 = dot(nv, tau.data(), state_.v.data()) + passive_power_;  // at the start
@@ -672,6 +674,7 @@ bool Simulator::step() {
   passive_power_ = passive_power();
   W_ += 0.5 * config_.dt * (P0 + dot(nv, tau.data(), state_.v.data()) + passive_power_);
   save(state_, last_good_);
+  for (const auto& r : extra_) save(r->state, r->last_good);
   if (!wrenches_.empty()) count_down_link_wrenches();
   if (energy_step) {
     save(state_, last_checked_);
@@ -713,6 +716,7 @@ void Simulator::roll_back(const StepInfo& info) {
           " x the reference " + num(E_ref_) + " J";
   }
   for (size_t j = 0; j < bodies_.size(); ++j) body_states_[j] = body_last_good_[j];
+  if (!extra_.empty()) roll_back_extra_robots();
   contacts_fresh_ = false;
   const State& back = to_checked ? last_checked_ : last_good_;
   state_.base = back.base;
@@ -852,6 +856,11 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
         scene_collision(scene, &sim->model(), robot ? nullptr : &none, urdf_xml));
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
+  if (!scene.robot_name.empty() || !scene.robot_namespace.empty()) {
+    sim->set_robot_name(scene.robot_name.empty() ? sim->robot_name() : scene.robot_name,
+                        scene.robot_namespace);
+  }
+  add_scene_robots(*sim, scene);
   return sim;
 }
 

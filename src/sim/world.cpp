@@ -111,6 +111,7 @@ void Simulator::set_robot_name(const std::string& name, const std::string& ns) {
 std::vector<WorldModel> Simulator::world_models() const {
   std::vector<WorldModel> out;
   if (!robot_name_.empty()) out.push_back({robot_name_, "robot", robot_ns_, !model_->floating});
+  for (const auto& r : extra_) out.push_back({r->name, "robot", r->ns, !r->model->floating});
   for (const SceneObject& o : object_specs_) out.push_back({o.name, "object", "", o.is_static});
   return out;
 }
@@ -138,7 +139,7 @@ void Simulator::check_new_name(const std::string& name) const {
                        "name '" + name + "' is not a frame name (no spaces, '/', '#' or ':')");
     }
   }
-  if (name == robot_name_ || object_index(name) >= 0) {
+  if (robot_index(name) >= 0 || object_index(name) >= 0) {
     throw WorldError(K::NameInUse, "name '" + name + "' is already a model's");
   }
   if (!robot_name_.empty() && model_->link_index(name) >= 0) {
@@ -170,9 +171,9 @@ WorldEditPtr Simulator::prepare_spawn(const SceneObject& o) const {
 }
 
 WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
-  if (!name.empty() && name == robot_name_) {
+  if (robot_index(name) >= 0) {
     throw WorldError(WorldError::Kind::Invalid,
-                     "name '" + name + "' is the robot's, which cannot be deleted");
+                     "name '" + name + "' is a robot's, which cannot be deleted");
   }
   const int j = object_index(name);
   if (j < 0) throw WorldError(WorldError::Kind::NotFound, "name '" + name + "': no such model");
@@ -347,12 +348,14 @@ void Simulator::delete_model(const std::string& name) {
 
 ModelState Simulator::model_state(const std::string& name) {
   ModelState s;
-  if (!name.empty() && name == robot_name_) {
-    const int nb = model_->nv_base();
-    s.pose = state_.base;
-    if (nb == 6) s.twist = to_world(state_.base.R, state_.v.head<6>());
-    s.q = state_.q;
-    s.v = state_.v.tail(model_->nv - nb);
+  if (const int k = robot_index(name); k >= 0) {
+    const Model& m = robot_model(k);
+    const State& x = robot_state(k);
+    const int nb = m.nv_base();
+    s.pose = x.base;
+    if (nb == 6) s.twist = to_world(x.base.R, x.v.head<6>());
+    s.q = x.q;
+    s.v = x.v.tail(m.nv - nb);
     return s;
   }
   const int j = object_index(name);
@@ -368,17 +371,18 @@ std::string Simulator::set_model_state(const std::string& name, const ModelState
   if (!s.twist.allFinite())
     throw WorldError(WorldError::Kind::Invalid, what + ".twist is not finite");
   check_rates(s.twist, config_.guard.max_rate, what + ".twist");
-  if (!name.empty() && name == robot_name_) {
-    const int nb = model_->nv_base();
-    if (s.q.size() != model_->n) {
+  if (const int k = robot_index(name); k >= 0) {
+    const Model& m = robot_model(k);
+    const int nb = m.nv_base();
+    if (s.q.size() != m.n) {
       throw WorldError(WorldError::Kind::Invalid,
                        what + ".joint positions: " + std::to_string(s.q.size()) +
-                           " given, the robot has " + std::to_string(model_->n));
+                           " given, the robot has " + std::to_string(m.n));
     }
-    if (s.v.size() != model_->nv - nb) {
+    if (s.v.size() != m.nv - nb) {
       throw WorldError(WorldError::Kind::Invalid,
                        what + ".joint velocities: " + std::to_string(s.v.size()) +
-                           " given, the robot has " + std::to_string(model_->nv - nb));
+                           " given, the robot has " + std::to_string(m.nv - nb));
     }
     if (!s.q.allFinite())
       throw WorldError(WorldError::Kind::Invalid, what + ".joint positions are not finite");
@@ -387,12 +391,12 @@ std::string Simulator::set_model_state(const std::string& name, const ModelState
       throw WorldError(WorldError::Kind::Invalid,
                        what + ".twist must be zero: the robot's base is fixed");
     }
-    State x = state_;
+    State x = robot_state(k);
     x.base = s.pose;
     x.q = s.q;
     if (nb == 6) x.v.head<6>() = to_body(s.pose.R, s.twist);
-    x.v.tail(model_->nv - nb) = s.v;
-    set_state(x);
+    x.v.tail(m.nv - nb) = s.v;
+    set_robot_state(k, x);
     contacts_fresh_ = false;
     return interpenetration_report();
   }

@@ -1,0 +1,50 @@
+// The ROS interface of a simulator's robots 1.. (docs/ros.md "Several robots"; robot 0 is the
+// node's own): per robot, under its namespace NS, the parameter NS/robot_description, the topics
+// NS/joint_states and NS/torque_command, its controllers' NS/NAME/command (a trajectory
+// controller's NS/NAME/state is not published yet), and its TF frames NS/LINK (REP 105: its root
+// link NS/ROOT hangs on the world frame; no tf_prefix).
+#pragma once
+
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "se3_sim/sim.h"
+
+namespace se3_ros {
+
+/// Robot k's namespace on ROS: its scene namespace, else its name.
+std::string robot_ros_namespace(const se3::Simulator& sim, int k);
+/// A copy of model whose link names carry prefix + "/" (prefix "" leaves them), for TF.
+se3::Model prefixed_links(const se3::Model& model, const std::string& prefix);
+
+class RobotInterfaces {
+ public:
+  using WithSim = std::function<void(const std::function<void(se3::Simulator&)>&)>;
+  /// Advertises the topics of sim's robots 1.. under nh (and sets each NS/robot_description to
+  /// its URDF file's text). with_sim runs a function with the simulator held (the node's lock).
+  /// Commands are checked as the node's own (max_effort, max_wrench). Throws
+  /// std::runtime_error for an unreadable URDF file.
+  RobotInterfaces(ros::NodeHandle nh, const se3::Simulator& sim, const se3::Scene& scene,
+                  std::string world_frame, double max_effort, double max_wrench, WithSim with_sim);
+  ~RobotInterfaces();
+  /// The fixed joints' transforms of every robot, for /tf_static.
+  std::vector<geometry_msgs::TransformStamped> static_transforms(const ros::Time& stamp) const;
+  /// Under the node's lock: every robot's joint_states and /tf.
+  void publish(se3::Simulator& sim, const ros::Time& stamp, tf2_ros::TransformBroadcaster& tf);
+
+  struct Robot;
+
+ private:
+  std::vector<std::unique_ptr<Robot>> robots_;
+  std::string world_frame_;
+  double max_effort_, max_wrench_;
+  WithSim with_sim_;
+};
+
+}  // namespace se3_ros

@@ -1,0 +1,196 @@
+// The ROS interface of robots 1.. of a simulator (robot_interfaces.h, docs/ros.md "Several
+// robots").
+#include "se3_sim/ros/robot_interfaces.h"
+
+#include <sensor_msgs/JointState.h>
+#include <std_msgs/Float64.h>
+#include <std_msgs/Float64MultiArray.h>
+#include <trajectory_msgs/JointTrajectory.h>
+
+#include <stdexcept>
+
+#include "se3_sim/JointTorques.h"
+#include "se3_sim/limits.h"
+#include "se3_sim/ros/convert.h"
+
+namespace se3_ros {
+
+struct RobotInterfaces::Robot {
+  int k = 0;
+  std::string ns;
+  const se3::Model* model = nullptr;  ///< the simulator's (fixed while it runs)
+  se3::Model tf_model;                ///< its links named NS/LINK
+  JointTable joints;
+  TfTree tree;
+  ros::Publisher joint_pub;
+  ros::Subscriber cmd_sub;
+  std::vector<ros::Subscriber> ctl_subs;
+  TorqueCommand torque;
+  sensor_msgs::JointState js;
+  se3::VecX effort;
+  std::vector<se3::SE3> links;
+  std::vector<geometry_msgs::TransformStamped> tfs;
+};
+
+std::string robot_ros_namespace(const se3::Simulator& sim, int k) {
+  const std::string& ns = sim.robot_namespace(k);
+  return ns.empty() ? sim.robot_name(k) : ns;
+}
+
+se3::Model prefixed_links(const se3::Model& model, const std::string& prefix) {
+  se3::Model m = model;
+  if (prefix.empty()) return m;
+  for (se3::LinkFrame& L : m.links) L.name = prefix + "/" + L.name;
+  return m;
+}
+
+RobotInterfaces::RobotInterfaces(ros::NodeHandle nh, const se3::Simulator& sim,
+                                 const se3::Scene& scene, std::string world_frame,
+                                 double max_effort, double max_wrench, WithSim with_sim)
+    : world_frame_(std::move(world_frame)),
+      max_effort_(max_effort),
+      max_wrench_(max_wrench),
+      with_sim_(std::move(with_sim)) {
+  for (int k = 1; k < sim.robot_count(); ++k) {
+    auto r = std::make_unique<Robot>();
+    Robot& R = *r;
+    R.k = k;
+    R.ns = robot_ros_namespace(sim, k);
+    R.model = &sim.robot_model(k);
+    R.tf_model = prefixed_links(*R.model, R.ns);
+    const se3::Scene* entry =
+        k - 1 < static_cast<int>(scene.extra_robots.size()) ? &scene.extra_robots[k - 1] : nullptr;
+    R.joints = joint_table(
+        *R.model, entry ? entry->locked_joints : std::vector<std::pair<std::string, double>>{});
+    R.tree = tf_tree(R.tf_model, world_frame_);
+    ros::NodeHandle rnh(nh, R.ns);
+    if (entry && !entry->robot_path.empty()) {
+      std::string text, why;
+      if (!se3::read_file(entry->robot_path, text, &why)) {
+        throw std::runtime_error("robot '" + sim.robot_name(k) + "': cannot read " +
+                                 entry->robot_path + ": " + why);
+      }
+      rnh.setParam("robot_description", text);
+    }
+    R.joint_pub = rnh.advertise<sensor_msgs::JointState>("joint_states", 10);
+    R.cmd_sub = rnh.subscribe<se3_sim::JointTorques>(
+        "torque_command", 1000,
+        [this, &R](const se3_sim::JointTorques::ConstPtr& msg) {
+          TorqueCommand cmd;
+          const std::string why =
+              check_torque_command(*R.model, R.joints, *msg, max_effort_, max_wrench_, cmd);
+          if (!why.empty()) {
+            ROS_WARN_THROTTLE(1.0, "simulator: %s/torque_command refused: %s", R.ns.c_str(),
+                              why.c_str());
+            return;
+          }
+          with_sim_([&](se3::Simulator& s) {
+            for (const auto& ie : cmd.efforts) {
+              if (ie.first > 0) s.set_robot_joint_effort(R.k, ie.first, ie.second);
+            }
+            if (cmd.has_base_wrench) s.set_robot_base_wrench(R.k, cmd.base_wrench);
+          });
+        },
+        ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+    // The scene's controllers of this robot: NS/NAME/command.
+    const std::vector<se3::ControllerSpec> specs =
+        entry ? entry->controllers : std::vector<se3::ControllerSpec>{};
+    for (size_t c = 0; c < specs.size(); ++c) {
+      const se3::ControllerSpec& s = specs[c];
+      const int ci = static_cast<int>(c);
+      const std::string topic = s.name + "/command";
+      auto set_command = [this, &R, ci](const double* values, size_t n) {
+        std::string why;
+        with_sim_([&](se3::Simulator& s) {
+          if (se3::ControllerSet* set = s.robot_controllers(R.k)) {
+            why = set->set_command(ci, values, n);
+          }
+        });
+        if (!why.empty()) {
+          ROS_WARN_THROTTLE(1.0, "simulator: %s controller command refused: %s", R.ns.c_str(),
+                            why.c_str());
+        }
+      };
+      if (s.kind == se3::ControllerKind::Trajectory) {
+        R.ctl_subs.push_back(rnh.subscribe<trajectory_msgs::JointTrajectory>(
+            topic, 100,
+            [this, &R, ci](const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
+              se3::TrajectoryCommand cmd;
+              cmd.joint_names = msg->joint_names;
+              cmd.points.resize(msg->points.size());
+              for (size_t p = 0; p < msg->points.size(); ++p) {
+                const trajectory_msgs::JointTrajectoryPoint& in = msg->points[p];
+                se3::TrajectoryCommand::Point& out = cmd.points[p];
+                out.time_from_start = in.time_from_start.toSec();
+                out.positions = in.positions;
+                out.velocities = in.velocities;
+                out.accelerations = in.accelerations;
+              }
+              std::string why;
+              with_sim_([&](se3::Simulator& s) {
+                // header.stamp is taken as simulated time when not zero (use_sim_time).
+                if (!msg->header.stamp.isZero()) cmd.start = msg->header.stamp.toSec();
+                if (se3::ControllerSet* set = s.robot_controllers(R.k)) {
+                  why = set->set_trajectory(ci, cmd, s.time());
+                }
+              });
+              if (!why.empty()) {
+                ROS_WARN_THROTTLE(1.0, "simulator: %s trajectory refused: %s", R.ns.c_str(),
+                                  why.c_str());
+              }
+            },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      } else if (se3::single_joint(s.kind)) {
+        R.ctl_subs.push_back(rnh.subscribe<std_msgs::Float64>(
+            topic, 1000,
+            [set_command](const std_msgs::Float64::ConstPtr& msg) { set_command(&msg->data, 1); },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      } else {
+        R.ctl_subs.push_back(rnh.subscribe<std_msgs::Float64MultiArray>(
+            topic, 1000,
+            [set_command](const std_msgs::Float64MultiArray::ConstPtr& msg) {
+              set_command(msg->data.data(), msg->data.size());
+            },
+            ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      }
+      ROS_INFO("simulator: robot %s: controller %s (%s) on %s", sim.robot_name(k).c_str(),
+               s.name.c_str(), s.type.c_str(), R.ctl_subs.back().getTopic().c_str());
+    }
+    ROS_INFO("simulator: robot %s (%d joints, %s base) on %s/joint_states, TF frames %s/LINK",
+             sim.robot_name(k).c_str(), R.model->n, R.model->floating ? "free" : "fixed",
+             rnh.getNamespace().c_str(), R.ns.c_str());
+    robots_.push_back(std::move(r));
+  }
+}
+
+RobotInterfaces::~RobotInterfaces() = default;
+
+std::vector<geometry_msgs::TransformStamped> RobotInterfaces::static_transforms(
+    const ros::Time& stamp) const {
+  std::vector<geometry_msgs::TransformStamped> out;
+  for (const auto& r : robots_) {
+    const auto t = tf_static_transforms(r->tf_model, r->tree, stamp);
+    out.insert(out.end(), t.begin(), t.end());
+  }
+  return out;
+}
+
+void RobotInterfaces::publish(se3::Simulator& sim, const ros::Time& stamp,
+                              tf2_ros::TransformBroadcaster& tf) {
+  for (const auto& rp : robots_) {
+    Robot& R = *rp;
+    const se3::Model& m = *R.model;
+    const se3::State& x = sim.robot_state(R.k);
+    const se3::VecX& a = sim.robot_actuation(R.k);
+    R.effort.resize(m.n);
+    for (int i = 1; i <= m.n; ++i) R.effort[i - 1] = a[m.idx_v(i)];
+    fill_joint_state(m, R.joints, x, R.effort, R.js);
+    R.js.header.stamp = stamp;
+    sim.robot_link_poses(R.k, R.links);
+    tf_transforms(R.tf_model, R.tree, R.links, world_frame_, stamp, R.tfs);
+    R.joint_pub.publish(R.js);
+    tf.sendTransform(R.tfs);
+  }
+}
+
+}  // namespace se3_ros

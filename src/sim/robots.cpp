@@ -1,0 +1,247 @@
+// Several robots in one Simulator (sim.h, docs/multi_robot.md): robots 1.. beside robot 0, each
+// a system of its own with its state, stepper, commands, controllers and joint limits.
+#include <cctype>
+#include <cmath>
+#include <stdexcept>
+
+#include "se3_sim/format.h"
+#include "se3_sim/sim.h"
+
+namespace se3 {
+
+namespace {
+
+// A state of model m: sizes, finite, continuous joints wrapped.
+State checked_state(const Model& m, const State& s, const std::string& what) {
+  if (s.q.size() != m.n || s.v.size() != m.nv) {
+    throw std::invalid_argument(what + ": state sizes do not match the model");
+  }
+  if (!s.finite()) {
+    throw std::invalid_argument(what + ": state is not finite (or its rotation not orthonormal)");
+  }
+  State x = s;
+  wrap_continuous_joints(m, x.q);
+  return x;
+}
+
+// The guard's per-step check of a robot: finite, no rate above lim, a free base's pose finite.
+bool robot_ok(const Model& m, const State& x, double lim) {
+  bool ok = x.q.allFinite();
+  for (int k = 0; k < m.nv; ++k) ok &= std::abs(x.v[k]) <= lim;
+  if (!m.floating) return ok;
+  return ok && x.base.p.allFinite() && is_rotation(x.base.R);
+}
+
+}  // namespace
+
+Simulator::ExtraRobot& Simulator::extra(int k) const {
+  if (k < 1 || k > static_cast<int>(extra_.size())) {
+    throw std::out_of_range("robot index " + std::to_string(k) + " out of range (" +
+                            std::to_string(robot_count()) + " robots)");
+  }
+  return *extra_[k - 1];
+}
+
+int Simulator::add_robot(const std::string& name, const std::string& ns, Model model,
+                         const State& initial, const std::vector<ControllerSpec>& controllers,
+                         bool joint_limits) {
+  if (name.empty()) throw std::invalid_argument("robot name is empty");
+  for (char c : name) {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == '/' || c == '#' || c == ':') {
+      throw std::invalid_argument("robot name '" + name +
+                                  "' is not a frame name (no spaces, '/', '#' or ':')");
+    }
+  }
+  if (robot_index(name) >= 0 || object_index(name) >= 0) {
+    throw std::invalid_argument("robot name '" + name + "' is already a model's");
+  }
+  const std::string what = "robot '" + name + "'";
+  auto r = std::make_unique<ExtraRobot>(model);
+  r->name = name;
+  r->ns = ns;
+  r->model = std::make_unique<Model>(std::move(model));
+  const Model& m = *r->model;
+  r->initial = checked_state(m, initial, what);
+  r->stepper = make_stepper(config_.integrator, m, config_.stepper);
+  ConstraintSpec spec;
+  spec.joint_limits = joint_limits;
+  if (config_.mimic_joints) spec.bilateral = mimic_constraints(m);
+  if (!spec.empty()) {
+    r->constraints = std::make_unique<ConstraintSystem>(m, spec);
+    r->constraints->anchor(r->initial);
+    r->constraints->project(r->initial);
+    r->constraints_start = std::make_unique<ConstraintSystem>(*r->constraints);
+  }
+  r->command = VecX::Zero(m.nv);
+  r->actuation = VecX::Zero(m.nv);
+  if (!controllers.empty()) r->controllers = std::make_unique<ControllerSet>(m, controllers);
+  extra_.push_back(std::move(r));
+  reset_extra_robots();
+  return robot_count() - 1;
+}
+
+int Simulator::robot_index(const std::string& name) const {
+  if (name.empty()) return -1;
+  if (name == robot_name_) return 0;
+  for (size_t k = 0; k < extra_.size(); ++k) {
+    if (extra_[k]->name == name) return static_cast<int>(k) + 1;
+  }
+  return -1;
+}
+
+const Model& Simulator::robot_model(int k) const {
+  return k == 0 ? *model_ : *extra(k).model;
+}
+
+const State& Simulator::robot_state(int k) const {
+  return k == 0 ? state_ : extra(k).state;
+}
+
+const std::string& Simulator::robot_name(int k) const {
+  return k == 0 ? robot_name_ : extra(k).name;
+}
+
+const std::string& Simulator::robot_namespace(int k) const {
+  return k == 0 ? robot_ns_ : extra(k).ns;
+}
+
+double Simulator::set_robot_joint_effort(int k, int i, double effort) {
+  if (k == 0) return set_joint_effort(i, effort);
+  ExtraRobot& r = extra(k);
+  const Model& m = *r.model;
+  if (i < 1 || i > m.n) throw std::out_of_range("joint index out of range");
+  if (!std::isfinite(effort)) throw std::invalid_argument("effort is not finite");
+  const double lim = m.effort[i];
+  if (std::isfinite(lim) && lim > 0) effort = std::min(lim, std::max(-lim, effort));
+  r.command[m.idx_v(i)] = effort;
+  return effort;
+}
+
+void Simulator::set_robot_base_wrench(int k, const Vec6& wrench) {
+  if (k == 0) return set_base_wrench(wrench);
+  ExtraRobot& r = extra(k);
+  if (!wrench.allFinite()) throw std::invalid_argument("base wrench is not finite");
+  if (r.model->floating) r.command.head<6>() = wrench;
+}
+
+const VecX& Simulator::robot_actuation(int k) const {
+  if (k == 0) return actuation();
+  const ExtraRobot& r = extra(k);
+  return r.controllers ? r.actuation : r.command;
+}
+
+void Simulator::set_robot_state(int k, const State& s) {
+  if (k == 0) return set_state(s);
+  ExtraRobot& r = extra(k);
+  r.state = checked_state(*r.model, s, "robot '" + r.name + "'");
+  r.last_good = r.state;
+  r.stepper->restart();
+}
+
+ControllerSet* Simulator::robot_controllers(int k) {
+  return k == 0 ? controllers() : extra(k).controllers.get();
+}
+
+void Simulator::set_robot_controllers(int k, const std::vector<ControllerSpec>& specs) {
+  if (k == 0) return set_controllers(specs);
+  ExtraRobot& r = extra(k);
+  if (specs.empty()) {
+    r.controllers.reset();
+    return;
+  }
+  auto c = std::make_unique<ControllerSet>(*r.model, specs);
+  c->reset(r.state);
+  r.controllers = std::move(c);
+}
+
+void Simulator::robot_link_poses(int k, std::vector<SE3>& out) {
+  if (k == 0) return link_poses(out);
+  ExtraRobot& r = extra(k);
+  const Model& m = *r.model;
+  forward_kinematics(m, r.diag, r.state.base, r.state.q);
+  out.resize(m.links.size());
+  for (size_t j = 0; j < m.links.size(); ++j) {
+    out[j] = r.diag.oMb[m.links[j].body] * m.links[j].offset;
+  }
+}
+
+Vec6 Simulator::robot_momentum(int k) {
+  if (k == 0) return momentum();
+  ExtraRobot& r = extra(k);
+  return spatial_momentum(*r.model, r.diag, r.state.base, r.state.q, r.state.v);
+}
+
+double Simulator::robot_kinetic_energy(int k) {
+  if (k == 0) return kinetic_energy();
+  ExtraRobot& r = extra(k);
+  return se3::kinetic_energy(*r.model, r.diag, r.state.base, r.state.q, r.state.v);
+}
+
+bool Simulator::step_extra_robots() {
+  const double h = config_.dt;
+  for (const auto& rp : extra_) {
+    ExtraRobot& r = *rp;
+    const VecX* tau = &r.command;
+    if (r.controllers) {
+      r.actuation = r.command;
+      r.controllers->update(r.state, time_, h, r.actuation);
+      tau = &r.actuation;
+    }
+    const StepInfo info = r.constraints
+                              ? constrained_step(*r.constraints, *r.stepper, r.state, *tau, h)
+                              : r.stepper->step(r.state, *tau, h);
+    if (info.ok && robot_ok(*r.model, r.state, config_.guard.max_rate)) continue;
+    std::string why = info.ok ? "a rate exceeds the limit " + num(config_.guard.max_rate) +
+                                    " or the state is not finite"
+                              : info.reason;
+    roll_back_extra_robots();
+    failure_ = "diverged at t = " + num(time_ + h) + " s with " + r.stepper->name() +
+               ", dt = " + num(h) + ": robot '" + r.name + "': " + why +
+               "; state rolled back to t = " + num(time_) + " s";
+    return false;
+  }
+  return true;
+}
+
+void Simulator::roll_back_extra_robots() {
+  for (const auto& r : extra_) {
+    r->state = r->last_good;
+    r->stepper->restart();
+  }
+}
+
+void Simulator::reset_extra_robots() {
+  for (const auto& rp : extra_) {
+    ExtraRobot& r = *rp;
+    r.state = r.initial;
+    r.last_good = r.initial;
+    r.command.setZero();
+    r.actuation.setZero();
+    if (r.constraints_start)
+      r.constraints = std::make_unique<ConstraintSystem>(*r.constraints_start);
+    if (r.controllers) r.controllers->reset(r.state);
+    r.stepper->restart();
+  }
+}
+
+void add_scene_robots(Simulator& sim, const Scene& scene) {
+  for (size_t i = 0; i < scene.extra_robots.size(); ++i) {
+    const Scene& e = scene.extra_robots[i];
+    const std::string where = scene.file + ": robots[" + std::to_string(i + 1) + "]";
+    Model m = scene_model(e);
+    const State x = scene_state(e, m);
+    const std::string name = !e.robot_name.empty() ? e.robot_name
+                             : m.name.empty()      ? "robot" + std::to_string(i + 1)
+                                                   : m.name;
+    try {
+      sim.add_robot(name, e.robot_namespace, std::move(m), x, e.controllers,
+                    e.constraints.joint_limits);
+    } catch (const std::invalid_argument& err) {
+      throw SceneError(where + ": " + err.what());
+    } catch (const ControllerError& err) {
+      throw SceneError(where + ".controllers: " + err.what());
+    }
+  }
+}
+
+}  // namespace se3

@@ -1,0 +1,248 @@
+// Several robots in one Simulator (src/sim/robots.cpp, docs/multi_robot.md): the scene's
+// `robots:` list, each robot's commands moving only it, each free-floating robot's momentum
+// untouched by the others, the world interface listing every robot.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+
+#include "se3_sim/sim.h"
+#include "se3_sim/world.h"
+
+using namespace se3;
+
+namespace {
+
+const std::string kRoot = SE3_SIM_SOURCE_DIR;
+
+Scene scene_of(const std::string& text) {
+  return parse_scene(text, kRoot, "two.yaml");
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The UR5 and the Panda side by side, fixed, without gravity (nothing moves unless driven).
+const char* kTwoArms =
+    "gravity: [0, 0, 0]\n"
+    "robots:\n"
+    "  - name: ur5\n"
+    "    urdf: data/robots/ur5_robot.urdf\n"
+    "    base: fixed\n"
+    "    base_pose: {position: [-0.6, 0, 0]}\n"
+    "    initial_positions: {shoulder_lift_joint: -1.2, elbow_joint: 1.0}\n"
+    "  - name: panda\n"
+    "    urdf: data/robots/panda.urdf\n"
+    "    namespace: /panda\n"
+    "    base: fixed\n"
+    "    base_pose: {position: [0.6, 0, 0], orientation: [0, 0, 1, 0]}\n"
+    "    initial_positions: {panda_joint2: 0.5, panda_joint4: -2.0, panda_joint6: 2.5}\n";
+
+// Two free-floating double pendulums in zero gravity, apart, both tumbling.
+std::string two_floating(
+    const std::string& second_urdf = "data/robots/double_pendulum_simple.urdf") {
+  return "gravity: [0, 0, 0]\nintegrator: rkmk4\ndt: 0.001\n"
+         "robots:\n"
+         "  - name: a\n"
+         "    urdf: data/robots/double_pendulum_simple.urdf\n"
+         "    base: free\n"
+         "    joint_limits: false\n"
+         "    base_twist: [0.3, -0.2, 0.5, 0.1, 0, 0]\n"
+         "    initial_velocities: {joint1: 2.0, joint2: -1.0}\n"
+         "  - name: b\n"
+         "    urdf: " +
+         second_urdf +
+         "\n"
+         "    namespace: b\n"
+         "    base: free\n"
+         "    joint_limits: false\n"
+         "    base_pose: {position: [3, 0, 0]}\n"
+         "    base_twist: [0, 0.4, 0, 0, 0.2, 0]\n"
+         "    initial_velocities: {joint1: -1.5}\n";
+}
+
+}  // namespace
+
+TEST(MultiRobot, SceneRobotsListMakesOneSystemPerRobot) {
+  const Scene s = scene_of(kTwoArms);
+  EXPECT_EQ(s.robot_name, "ur5");
+  EXPECT_EQ(s.robot_namespace, "");
+  ASSERT_EQ(s.extra_robots.size(), 1u);
+  EXPECT_EQ(s.extra_robots[0].robot_namespace, "panda");  // the leading '/' dropped
+  auto sim = make_simulator(s);
+  ASSERT_EQ(sim->robot_count(), 2);
+  EXPECT_EQ(sim->robot_name(0), "ur5");
+  EXPECT_EQ(sim->robot_name(1), "panda");
+  EXPECT_EQ(sim->robot_namespace(1), "panda");
+  EXPECT_EQ(&sim->robot_model(0), &sim->model());
+  EXPECT_EQ(sim->robot_model(1).name, "panda");
+  EXPECT_EQ(sim->robot_index("panda"), 1);
+  EXPECT_EQ(sim->robot_index("nobody"), -1);
+  EXPECT_NEAR(sim->robot_state(1).base.p.x(), 0.6, 1e-15);
+  const int j4 = sim->robot_model(1).joint_index("panda_joint4");
+  EXPECT_NEAR(sim->robot_state(1).q[sim->robot_model(1).idx_q(j4)], -2.0, 1e-15);
+  const auto models = sim->world_models();
+  ASSERT_EQ(models.size(), 2u);
+  EXPECT_EQ(models[1].name, "panda");
+  EXPECT_EQ(models[1].kind, "robot");
+  EXPECT_EQ(models[1].ns, "panda");
+  EXPECT_TRUE(models[1].is_static);
+  // The world interface reads and sets robot 1 as a model.
+  ModelState m = sim->model_state("panda");
+  EXPECT_EQ(m.q.size(), sim->robot_model(1).n);
+  m.q[0] = 0.25;
+  sim->set_model_state("panda", m);
+  EXPECT_EQ(sim->robot_state(1).q[0], 0.25);
+  EXPECT_NE(error_of([&] {
+              sim->spawn_object(parse_scene_object("shape: {sphere: 0.1}", ".", "<o>", "panda"));
+            }),
+            "");
+  EXPECT_NE(error_of([&] { sim->delete_model("panda"); }), "");
+}
+
+TEST(MultiRobot, EachCommandMovesOnlyItsRobot) {
+  for (int driven = 0; driven < 2; ++driven) {
+    auto sim = make_simulator(scene_of(kTwoArms));
+    const State a0 = sim->robot_state(0), b0 = sim->robot_state(1);
+    sim->set_robot_joint_effort(driven, 1, 5.0);
+    ASSERT_EQ(sim->step_n(200), 200) << sim->failure();
+    const State& a = sim->robot_state(0);
+    const State& b = sim->robot_state(1);
+    const State& moved = driven == 0 ? a : b;
+    const State& still = driven == 0 ? b : a;
+    const State& moved0 = driven == 0 ? a0 : b0;
+    const State& still0 = driven == 0 ? b0 : a0;
+    EXPECT_GT(std::abs(moved.q[0] - moved0.q[0]), 1e-3) << "robot " << driven;
+    EXPECT_EQ(still.q, still0.q) << "robot " << 1 - driven << " moved";
+    EXPECT_EQ(still.v, still0.v);
+  }
+}
+
+// Each free-floating robot keeps its own momentum, and steps exactly as it would alone.
+TEST(MultiRobot, FreeFloatingRobotsKeepTheirOwnMomentum) {
+  auto sim = make_simulator(scene_of(two_floating()));
+  ASSERT_EQ(sim->robot_count(), 2);
+  const Vec6 ha = sim->robot_momentum(0), hb = sim->robot_momentum(1);
+  sim->set_robot_joint_effort(1, 1, 0.5);  // internal: robot b's momentum stays too
+  ASSERT_EQ(sim->step_n(1000), 1000) << sim->failure();
+  // rkmk4's truncation error at dt = 1 ms (each robot's internal forces conserve it).
+  EXPECT_LT((sim->robot_momentum(0) - ha).norm(), 1e-5 * ha.norm());
+  EXPECT_LT((sim->robot_momentum(1) - hb).norm(), 1e-5 * hb.norm());
+  EXPECT_GT(
+      (sim->robot_state(1).v - make_simulator(scene_of(two_floating()))->robot_state(1).v).norm(),
+      1e-3);  // b was driven
+  // Robot a alone: the same states, to the bit.
+  const Scene s = scene_of(two_floating());
+  Scene alone = s;
+  alone.extra_robots.clear();
+  auto one = make_simulator(alone);
+  ASSERT_EQ(one->step_n(1000), 1000) << one->failure();
+  EXPECT_EQ(one->state().q, sim->robot_state(0).q);
+  EXPECT_EQ(one->state().v, sim->robot_state(0).v);
+  EXPECT_EQ(one->state().base.p, sim->robot_state(0).base.p);
+}
+
+// `robots:` with one robot is `robot:` and its keys, to the bit.
+TEST(MultiRobot, OneEntryOfRobotsIsTheRobotKey) {
+  auto listed =
+      make_simulator(scene_of("robots:\n  - {urdf: data/robots/panda.urdf, base: fixed,"
+                              " initial_positions: {panda_joint2: 0.5}}\n"));
+  auto plain = make_simulator(scene_of(
+      "robot: data/robots/panda.urdf\nbase: fixed\ninitial_positions: {panda_joint2: 0.5}\n"));
+  ASSERT_EQ(listed->robot_count(), 1);
+  ASSERT_EQ(listed->step_n(300), 300);
+  ASSERT_EQ(plain->step_n(300), 300);
+  EXPECT_EQ(listed->state().q, plain->state().q);
+  EXPECT_EQ(listed->state().v, plain->state().v);
+}
+
+TEST(MultiRobot, ResetAndControllersApplyToEveryRobot) {
+  const std::string text = std::string(kTwoArms) +
+                           "    controllers:\n"
+                           "      hold:\n"
+                           "        type: effort_controllers/JointGroupPositionController\n"
+                           "        joints: [panda_joint1]\n"
+                           "        pid: {p: 100.0, d: 10.0}\n";
+  auto sim = make_simulator(scene_of(text));
+  ASSERT_NE(sim->robot_controllers(1), nullptr);
+  EXPECT_EQ(sim->robot_controllers(0), nullptr);
+  const double target = 0.3;
+  ControllerSet* c = sim->robot_controllers(1);
+  EXPECT_EQ(c->set_command(c->find("hold"), &target, 1), "");
+  ASSERT_EQ(sim->step_n(2000), 2000) << sim->failure();
+  const Model& pm = sim->robot_model(1);
+  const int j1 = pm.joint_index("panda_joint1");
+  EXPECT_NEAR(sim->robot_state(1).q[pm.idx_q(j1)], 0.3, 0.01);
+  sim->reset();
+  EXPECT_EQ(sim->robot_state(1).q[pm.idx_q(j1)], 0.0);
+  EXPECT_EQ(sim->time(), 0.0);
+}
+
+TEST(MultiRobot, BadRobotsKeysNameFileLineAndKey) {
+  const std::string a = "robots:\n  - {urdf: data/robots/panda.urdf}\n";
+  EXPECT_NE(error_of([&] {
+              scene_of("robot: data/robots/ur5_robot.urdf\n" + a);
+            }).find("two.yaml:1: 'robot' is a robot's key"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              scene_of("robots:\n  - {urdf: data/robots/panda.urdf, colour: 1}\n");
+            }).find("two.yaml:2: unknown key 'colour' in robots[0]"),
+            std::string::npos)
+      << error_of([&] { scene_of("robots:\n  - {urdf: data/robots/panda.urdf, colour: 1}\n"); });
+  EXPECT_NE(error_of([&] {
+              scene_of("robots:\n  - {name: x}\n");
+            }).find("two.yaml:2: 'robots[0]' needs urdf"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              scene_of(
+                  "robots:\n  - {name: x, urdf: data/robots/panda.urdf}\n"
+                  "  - {name: x, urdf: data/robots/panda.urdf}\n");
+            }).find("two.yaml:3: 'robots[1].name': robot name 'x' is used twice"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              scene_of(
+                  "robots:\n  - {namespace: n, urdf: data/robots/panda.urdf}\n"
+                  "  - {namespace: /n, urdf: data/robots/panda.urdf}\n");
+            }).find("'robots[1].namespace' 'n' is robots[0]'s too"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { scene_of("robots:\n  - {urdf: data/robots/none.urdf}\n"); }).find("not found"),
+      std::string::npos);
+  EXPECT_NE(error_of([&] {
+              scene_of("robots:\n  - {urdf: data/robots/panda.urdf, base: wobbly}\n");
+            }).find("two.yaml:2: 'base' is free or fixed"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              scene_of("robots:\n  - {urdf: data/robots/panda.urdf, namespace: p}\n");
+            }).find("two.yaml:2: 'robots[0].namespace': the first robot is the node's own"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { scene_of("robots: []\n"); }).find("needs at least one robot"),
+            std::string::npos);
+  // Two unnamed copies of one URDF: the second's model name is in use.
+  EXPECT_NE(error_of([&] {
+              make_simulator(
+                  scene_of("robots:\n  - {urdf: data/robots/panda.urdf}\n"
+                           "  - {urdf: data/robots/panda.urdf, base_pose: "
+                           "{position: [1, 0, 0]}}\n"));
+            }).find("two.yaml: robots[1]: robot name 'panda' is already a model's"),
+            std::string::npos);
+  // A joint the robot lacks names the scene.
+  EXPECT_NE(error_of([&] {
+              make_simulator(
+                  scene_of("robots:\n  - {urdf: data/robots/panda.urdf}\n"
+                           "  - {name: u, urdf: data/robots/ur5_robot.urdf, initial_positions: "
+                           "{panda_joint1: 1}}\n"));
+            }),
+            "");
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
