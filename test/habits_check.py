@@ -182,7 +182,14 @@ class FirstHour(unittest.TestCase):
         text = launch.text()
         self.assertNotEqual(launch.proc.returncode, 0, text)
         self.assertNotIn('Traceback', text)
-        self.assertEqual(text.count("cannot read URDF file '/no/such/robot.urdf'"), 1, text)
+        self.assertEqual(text.count('/no/such/robot.urdf: No such file or directory'), 1, text)
+        # A simulator that ends FATAL: plain roslaunch returns 0, rosrun se3_sim launch its code.
+        for command, failed in ((['roslaunch'], False), (['rosrun', PKG, 'launch'], True)):
+            launch = Launch(['robot:=' + HANGING, 'dt:=-1'], command=command)
+            self.addCleanup(launch.stop)
+            launch.proc.wait(60)
+            self.assertIn('FATAL', launch.text())
+            self.assertEqual(launch.proc.returncode != 0, failed, launch.text())
 
     def test_g_use_sim_time_is_not_left_true(self):
         launch = self.launch(['robot:=' + HANGING, 'use_sim_time:=true'])

@@ -302,17 +302,18 @@ std::string SimulatorNodeImpl::scene_file(const std::string& arg, bool robot_giv
 }
 
 void SimulatorNodeImpl::configure() {
-  // The robot: robot_description (loaded by the user, e.g. xacro's output; sim.launch empties
-  // it unless use_robot_description), else ~urdf_file (sim.launch's robot:=), else the scene's
+  // The robot: ~urdf_file (sim.launch's robot:=), else robot_description (loaded by the user,
+  // e.g. xacro's output; sim.launch empties it unless use_robot_description), else the scene's
   // robot.
   std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
   if (!urdf_file.empty() && urdf_file[0] != '/') {  // relative to where roslaunch runs
     const std::string cwd = get_text(pnh_, "cwd").value_or("");
     if (!cwd.empty()) urdf_file = cwd + "/" + urdf_file;
   }
-  std::string urdf_xml = get_text(nh_, "robot_description").value_or("");
-  const bool had_description = !urdf_xml.empty();
-  if (urdf_xml.empty() && !urdf_file.empty()) urdf_xml = read_file(urdf_file);
+  // ~urdf_file (robot:=) wins over the robot_description sim.launch loaded from it.
+  std::string urdf_xml =
+      urdf_file.empty() ? get_text(nh_, "robot_description").value_or("") : read_file(urdf_file);
+  const bool had_description = urdf_file.empty() && !urdf_xml.empty();
   const std::string scene_arg = get_text(pnh_, "scene").value_or("");
   const std::string scene_path = scene_arg.empty() ? "" : scene_file(scene_arg, !urdf_xml.empty());
   if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
