@@ -56,6 +56,7 @@ struct SceneError : std::runtime_error {
 ///   contact: {margin: 0.01, max_contacts_per_pair: 4, ground_per_body: true}
 ///       (the collision layer's options; ground_per_body: a body's shapes share one budget of
 ///       max_contacts_per_pair on the ground, CollisionOptions::ground_contacts_per_body)
+///   robot_on_ground: false          (true: Scene::robot_on_ground, ground.h)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
