@@ -42,6 +42,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/sim.h", "sim"},
     {"se3_sim/controllers.h", "sim"},
     {"se3_sim/gain_check.h", "sim"},
+    {"se3_sim/ground.h", "sim"},
     {"se3_sim/scene_collision.h", "sim"},
     {"se3_sim/sensors.h", "sim"},
     {"se3_sim/trajectory.h", "sim"},

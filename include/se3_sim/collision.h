@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -44,6 +45,13 @@ struct CollisionObject {
   /// Group 0: collides with the robot's other links even without CollisionOptions::
   /// self_collision (a URDF's Gazebo selfCollide: a pair collides when either link says so).
   bool self_collide = false;
+  /// The contact's correction of a penetration (a URDF's Gazebo kp and kd as ERP = h kp /
+  /// (h kp + kd), minDepth, maxVel), NaN: the scene's constraint_options. A pair takes the
+  /// link's where one side gives it; where both do, the softer erp, the larger slop and the
+  /// smaller speed.
+  double erp = std::numeric_limits<double>::quiet_NaN();
+  double slop = std::numeric_limits<double>::quiet_NaN();
+  double max_correction_velocity = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A pair the sim layer says never collides (by frame: adjacency).

@@ -194,6 +194,12 @@ std::vector<std::string> split_path_list(const std::string& list);
 /// resolve_resource with the given paths; a ROS node may use ros::package instead.
 using ResourceResolver = std::function<std::string(const std::string& uri, std::string* error)>;
 
+/// GeometryModel::warnings with the meshes whose package was not found folded into one line
+/// per package: how many meshes, which links, and how to add the package to ROS_PACKAGE_PATH
+/// (a robot whose mesh package is missing gives one line, not two per link). Other lines as
+/// they were, in order.
+std::vector<std::string> summarize_mesh_warnings(const std::vector<std::string>& warnings);
+
 // ---------------------------------------------------------------- meshes
 
 /// Bounds on what a mesh file may make the loader do.

@@ -31,6 +31,11 @@ struct SceneCollision {
   std::vector<std::string> warnings;  ///< meshes that could not be loaded (stand-ins used)
 };
 
+/// The robot's geometry as scene_collision reads it (urdf_xml as scene_geometry; meshes also
+/// on the package path of data/meshes of the package holding the robot or scene file).
+GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
+                                   const std::string& urdf_xml = "");
+
 /// The collision model of `scene` with robot `model` (null: objects only). `geometry` is the
 /// robot's (scene_geometry with meshes loaded); when null it is loaded here (package:// names
 /// on the package path of data/meshes of the package holding the robot file, then

@@ -56,6 +56,7 @@ struct SceneError : std::runtime_error {
 ///   contact: {margin: 0.01, max_contacts_per_pair: 4, ground_per_body: true}
 ///       (the collision layer's options; ground_per_body: a body's shapes share one budget of
 ///       max_contacts_per_pair on the ground, CollisionOptions::ground_contacts_per_body)
+///   robot_on_ground: false          (true: Scene::robot_on_ground, ground.h)
 /// A relative robot path is looked up next to the scene file, then under the package root
 /// (the nearest directory above the scene holding package.xml).
 struct Scene {
@@ -63,6 +64,9 @@ struct Scene {
   std::string name;
   std::string robot;       ///< as written ("" when the scene names none)
   std::string robot_path;  ///< resolved file, or "chain:N" ("" when the scene names no robot)
+  /// The folder relative mesh names of a URDF given as text (robot_description) are resolved
+  /// against ("": none; sim.launch's robot_description_dir).
+  std::string urdf_dir;
   bool floating = true;
   bool base_given = false;  ///< the scene says base: free or fixed
   bool has_base_inertia = false;
@@ -74,6 +78,12 @@ struct Scene {
   Vec3 base_visual_origin = Vec3::Zero();  ///< box centre, base link frame
   Vec3 base_visual_color = Vec3(0.8, 0.72, 0.4);
   SE3 base_pose;
+  bool base_pose_given = false;  ///< the scene says base_pose (robot_on_ground then keeps it)
+  /// `robot_on_ground: true` (the generic scene): the base is placed so that the robot's lowest
+  /// collision shape touches the ground (ground.h, base_on_ground) unless base_pose is given,
+  /// and a collision mesh that cannot be loaded is left out of contact (its warning says so)
+  /// instead of refusing the scene.
+  bool robot_on_ground = false;
   Vec6 base_twist = Vec6::Zero();
   std::vector<std::pair<std::string, double>> initial_positions;
   std::vector<std::pair<std::string, double>> initial_velocities;
@@ -255,6 +265,11 @@ class Simulator {
   void set_controllers(const std::vector<ControllerSpec>& specs);
   /// nullptr without controllers; set_command() on it changes their targets.
   ControllerSet* controllers() { return controllers_.get(); }
+  /// The controllers update every `steps` physics steps (>= 1; a URDF's gazebo_ros_control
+  /// controlPeriod over dt), with that period as their dt, and their efforts are held in
+  /// between (commands still act at every step).
+  void set_control_every(int steps) { control_every_ = steps < 1 ? 1 : steps; }
+  int control_every() const { return control_every_; }
 
   // ---- external wrenches on links (as Gazebo's apply_body_wrench)
   static constexpr int kMaxLinkWrenches = 16;
@@ -268,6 +283,12 @@ class Simulator {
   /// Removes the wrenches on one link (-1: all).
   void clear_link_wrenches(int link = -1);
   int link_wrench_count() const { return static_cast<int>(wrenches_.size()); }
+  /// Links that feel no gravity (<gazebo reference="LINK"><gravity>false</gravity>): each
+  /// carries a constant force -m g at its body's centre of mass, m the body's mass (its fixed
+  /// children's included), held over each step as commands are; kept through reset() and
+  /// clear_link_wrenches. A link merged into its parent by a fixed joint is not a body of its
+  /// own: returned (not applied), as are unknown names. Replaces the previous list.
+  std::vector<std::string> set_links_without_gravity(const std::vector<std::string>& links);
 
   // ---- constraints (constraints.h); none unless set
   /// Adds constraints (an empty spec removes them): anchors point_world constraints at the
@@ -575,11 +596,14 @@ class Simulator {
   std::unique_ptr<ConstraintSystem> constraints_;
   std::unique_ptr<ConstraintSystem> constraints_start_;  ///< as set, to restart from on reset
   std::unique_ptr<ControllerSet> controllers_;
-  std::vector<LinkWrench> wrenches_;  ///< capacity kMaxLinkWrenches, reserved once
+  std::vector<LinkWrench> wrenches_;    ///< capacity kMaxLinkWrenches, reserved once
+  std::vector<LinkWrench> weightless_;  ///< set_links_without_gravity: their weight cancelled
   Data diag_;
   KineticEnergyBound energy_bound_;
   State initial_, state_, last_good_, last_checked_;
   VecX command_, actuation_, forces_;
+  VecX held_;              ///< the controllers' efforts between updates (set_control_every)
+  int control_every_ = 1;  ///< physics steps per controller update
   /// Per velocity coordinate: the step count from which its command no longer acts.
   std::vector<std::uint64_t> command_until_;
   std::uint64_t next_expiry_ = std::numeric_limits<std::uint64_t>::max();  ///< min of those
@@ -630,6 +654,11 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
 /// Adds the scene's robots 1.. (Scene::extra_robots) to sim (make_simulator does). Throws
 /// SceneError naming the scene and the `robots:` entry (a name in use, a bad controller).
 void add_scene_robots(Simulator& sim, const Scene& scene);
+/// The URDF's <gazebo reference="LINK"><gravity>false</gravity> links on sim
+/// (Simulator::set_links_without_gravity) and its gazebo_ros_control controlPeriod
+/// (Simulator::set_control_every, rounded to steps of dt); make_simulator does it. One line per
+/// link it could not apply.
+std::vector<std::string> set_gazebo_gravity(Simulator& sim, const std::string& urdf_xml);
 
 // ------------------------------------------------------------------ `se3_dyn simulate`
 /// Options of a headless run (the command line's `simulate`).

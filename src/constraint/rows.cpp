@@ -536,6 +536,30 @@ double gap_reference(double g, double h, const RowParams& p) {
   return -p.erp * (g + p.slop) / h;
 }
 
+// The row parameters of a contact between a and b: p with the objects' own erp, slop and
+// max_correction_velocity where given (both: the softer erp, larger slop, smaller speed).
+// Returns p itself when neither gives any (the common case: no copy).
+static const RowParams& pair_params(const CollisionObject& a, const CollisionObject& b,
+                                    const RowParams& p) {
+  thread_local RowParams own;
+  const bool any = !std::isnan(a.erp) || !std::isnan(b.erp) || !std::isnan(a.slop) ||
+                   !std::isnan(b.slop) || !std::isnan(a.max_correction_velocity) ||
+                   !std::isnan(b.max_correction_velocity);
+  if (!any) return p;
+  auto pick = [](double x, double y, double fallback, bool smaller) {
+    if (std::isnan(x) && std::isnan(y)) return fallback;
+    if (std::isnan(x)) return y;
+    if (std::isnan(y)) return x;
+    return smaller ? std::min(x, y) : std::max(x, y);
+  };
+  own = p;
+  own.erp = pick(a.erp, b.erp, p.erp, true);
+  own.slop = pick(a.slop, b.slop, p.slop, false);
+  own.max_correction_velocity =
+      pick(a.max_correction_velocity, b.max_correction_velocity, p.max_correction_velocity, true);
+  return own;
+}
+
 void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
   const Vec3 seed = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
   t1 = seed.cross(n).normalized();
@@ -625,10 +649,12 @@ void add_contact_rows(ConstraintRows& rows, const std::vector<Contact>& contacts
                                         : std::max(oa.mu, ob.mu);
     const double g = -c.depth;
     rows.gap[n] = g;
+    // The pair's own correction (a URDF's Gazebo kp, kd, minDepth, maxVel), else the scene's.
+    const RowParams& pp = pair_params(oa, ob, p);
     // A penetration is removed at erp per step, but no faster than max_correction_velocity: the
     // push-out velocity stays in the bodies after they separate, so a deep start (a box spawned
     // 0.3 m into the ground asked for 60 m/s at dt = 1 ms) would otherwise launch them.
-    double ref = std::min(gap_reference(g, h, p), std::max(0.0, p.max_correction_velocity));
+    double ref = std::min(gap_reference(g, h, pp), std::max(0.0, pp.max_correction_velocity));
     const double e = std::max(objects[c.a].restitution, objects[c.b].restitution);
     if (e > 0) {  // an impact within this step bounces: its velocity reversed, times e
       const double vn = rows.J.row(n).dot(vfree);

@@ -143,9 +143,14 @@ class RendererNode {
       const se3::UrdfDocument doc = se3::parse_urdf_document(xml);  // once, for both
       auto m = std::make_unique<se3::Model>(se3::model_from_urdf(doc, opt));
       se3::GeometryOptions gopt;
-      gopt.resolver = rr::ros_resolver();
+      // Relative mesh names: beside the URDF of sim.launch's robot:= (robot_description_dir).
+      std::string dir;
+      nh_.getParam("robot_description_dir", dir);
+      gopt.resolver = rr::ros_resolver(dir);
       const se3::GeometryModel geometry = se3::geometry_from_urdf(*m, doc, gopt);
-      for (const std::string& w : geometry.warnings) ROS_WARN("renderer: %s", w.c_str());
+      for (const std::string& w : se3::summarize_mesh_warnings(geometry.warnings)) {
+        ROS_WARN("renderer: %s", w.c_str());
+      }
       renderer_->set_model(*m, geometry, draw_);
       poses_.assign(m->parent.size(),
                     SE3(Mat3::Constant(std::nan("")), Vec3::Constant(std::nan(""))));
@@ -162,12 +167,16 @@ class RendererNode {
       std::size_t tris = 0, source = 0;
       for (const rn::DrawItem& it : renderer_->items()) {
         tris += it.mesh->triangle_count();
-        source += it.mesh->source_triangles;
+        // Only meshes read from files: primitives and stand-ins are tessellated here.
+        if (it.shape == se3::ShapeType::Mesh && !it.stand_in) source += it.mesh->source_triangles;
       }
       model_ = std::move(m);
-      ROS_INFO("renderer: model '%s' with %d bodies, %zu visuals, %zu triangles (%zu in the files)",
+      // "in the files" only when mesh files were loaded (primitives and stand-ins are not).
+      const std::string files = source > 0 ? " (" + std::to_string(source) + " in the mesh files)"
+                                           : " (no mesh file loaded)";
+      ROS_INFO("renderer: model '%s' with %d bodies, %zu visuals, %zu triangles%s",
                model_->name.c_str(), int(model_->parent.size()), renderer_->items().size(), tris,
-               source);
+               files.c_str());
     } catch (const std::exception& e) {
       failed_xml_ = xml;
       ROS_ERROR("renderer: robot_description rejected: %s", e.what());

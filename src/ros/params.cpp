@@ -1,11 +1,15 @@
 // Typed parameters (params.h).
 #include "se3_sim/ros/params.h"
 
+#include <ros/console.h>
+#include <ros/param.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+
+#include "se3_sim/gazebo_tags.h"
 
 namespace se3_ros {
 namespace {
@@ -192,22 +196,91 @@ std::vector<se3::ControllerSpec> controllers_from_xmlrpc(const std::vector<std::
 }
 
 std::vector<se3::ControllerSpec> controllers_from_params(const ros::NodeHandle& nh,
-                                                         const std::vector<std::string>& names) {
-  std::vector<XmlRpcValue> configs;
+                                                         const std::vector<std::string>& names,
+                                                         std::vector<std::string>* errors) {
+  std::vector<se3::ControllerSpec> out;
+  const std::string where = "parameter server (" + nh.getNamespace() + ")";
   for (const std::string& name : names) {
-    // Checked before the parameter server is asked: roscpp throws for a name it cannot resolve.
-    if (const std::string why = se3::controller_name_problem(name); !why.empty()) {
-      throw se3::ControllerError("~controllers: " + why);
+    try {
+      // Checked before the parameter server is asked: roscpp throws for a name it cannot
+      // resolve.
+      if (const std::string why = se3::controller_name_problem(name); !why.empty()) {
+        throw se3::ControllerError("~controllers: " + why);
+      }
+      XmlRpcValue v;
+      if (!nh.getParam(name, v)) {
+        throw se3::ControllerError(
+            "no controller '" + name + "' on the parameter server: looked for " +
+            nh.resolveName(name) + "/type, and for NAMESPACE/" + name +
+            "/type in every namespace (none, or more than one): load its YAML first (sim.launch "
+            "controller_config:=FILE), or give controller_namespace:=");
+      }
+      out.push_back(controllers_from_xmlrpc({name}, {v}, where).at(0));
+    } catch (const se3::ControllerError& e) {
+      if (!errors) throw;
+      errors->push_back(e.what());
     }
-    XmlRpcValue v;
-    if (!nh.getParam(name, v)) {
-      throw se3::ControllerError("no controller '" + name + "' on the parameter server (" +
-                                 nh.resolveName(name) +
-                                 "): load its YAML first (sim.launch controller_config:=FILE)");
-    }
-    configs.push_back(v);
   }
-  return controllers_from_xmlrpc(names, configs, "parameter server (" + nh.getNamespace() + ")");
+  return out;
+}
+
+std::string declared_controller_namespace(const ros::NodeHandle& nh,
+                                          const std::vector<std::string>& names) {
+  std::vector<std::string> missing;
+  for (const std::string& name : names) {
+    if (!se3::controller_name_problem(name).empty()) return "";  // its own error follows
+    if (!nh.hasParam(name + "/type")) missing.push_back(name);
+  }
+  std::vector<std::string> all;
+  if (missing.empty() || !ros::param::getParamNames(all)) return "";
+  // Candidates: the namespaces holding the first missing controller.
+  const std::string tail = "/" + missing[0] + "/type";
+  std::vector<std::string> found;
+  for (const std::string& p : all) {
+    if (p.size() > tail.size() && p.compare(p.size() - tail.size(), tail.size(), tail) == 0) {
+      const std::string ns = p.substr(0, p.size() - tail.size());
+      bool all_there = true;
+      for (const std::string& name : names) {
+        all_there = all_there && ros::param::has(ns + "/" + name + "/type");
+      }
+      if (all_there && !ns.empty()) found.push_back(ns);
+    }
+  }
+  return found.size() == 1 ? found[0] : "";
+}
+
+// The controllers' namespace when ~controller_namespace is empty: the URDF's gazebo_ros_control
+// <robotNamespace> (where Gazebo runs them) when the named controllers are there, else the one
+// namespace the loaded YAML declares them under (rrbot's `rrbot: {...}`), else this node's.
+std::string controllers_namespace(const ros::NodeHandle& nh, const std::string& urdf_text,
+                                  const se3::Model& model, const std::vector<std::string>& names) {
+  std::vector<std::string> links, joints;
+  for (const se3::LinkFrame& lf : model.links) {
+    links.push_back(lf.name);
+    if (!lf.joint.empty()) joints.push_back(lf.joint);
+  }
+  const std::string robot_ns =
+      urdf_text.empty() ? std::string()
+                        : se3::read_gazebo_tags(urdf_text, links, joints).robot_namespace;
+  if (!robot_ns.empty()) {
+    try {
+      const ros::NodeHandle there_nh(nh, robot_ns);
+      bool there = true;
+      for (const std::string& n : names) {
+        there = there && se3::controller_name_problem(n).empty() && there_nh.hasParam(n + "/type");
+      }
+      if (there) return robot_ns;
+    } catch (const ros::InvalidNameException& e) {
+      ROS_WARN(
+          "simulator: the URDF's gazebo_ros_control robotNamespace '%s' is not a ROS name: "
+          "ignored",
+          robot_ns.c_str());
+    }
+  }
+  const std::string ns = declared_controller_namespace(nh, names);
+  if (!ns.empty())
+    ROS_INFO("simulator: controllers under %s, where their YAML declares them", ns.c_str());
+  return ns;
 }
 
 }  // namespace se3_ros

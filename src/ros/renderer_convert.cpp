@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
+#include <set>
 #include <utility>
 
 namespace se3 {
@@ -411,13 +413,34 @@ std::string reserve_frame_path(const std::string& dir, int& counter, std::string
   return "";
 }
 
+namespace {
+
+// ros::package::getPath, asked once per missing package: rospack prints an error line for each
+// call that does not find it (two per link of a robot whose mesh package is missing).
+std::string rospack_path(const std::string& pkg) {
+  static std::mutex mu;
+  static std::set<std::string> missing;
+  {
+    std::lock_guard<std::mutex> lock(mu);
+    if (missing.count(pkg)) return "";
+  }
+  std::string dir = ros::package::getPath(pkg);
+  if (dir.empty()) {
+    std::lock_guard<std::mutex> lock(mu);
+    if (missing.size() < 1024) missing.insert(pkg);
+  }
+  return dir;
+}
+
+}  // namespace
+
 ResourceResolver ros_resolver(const std::string& base_dir) {
   return [base_dir](const std::string& uri, std::string* error) -> std::string {
     if (uri.compare(0, 10, "package://") == 0) {
       const std::size_t slash = uri.find('/', 10);
       const std::string pkg =
           uri.substr(10, slash == std::string::npos ? std::string::npos : slash - 10);
-      std::string dir = pkg.empty() ? std::string() : ros::package::getPath(pkg);
+      std::string dir = pkg.empty() ? std::string() : rospack_path(pkg);
       if (dir.empty() && !pkg.empty()) {
         // se3_sim carries the meshes of its own robots (data/meshes) for a node started
         // without the launch files' ROS_PACKAGE_PATH.

@@ -37,6 +37,7 @@
 #include "se3_sim/Step.h"
 #include "se3_sim/format.h"
 #include "se3_sim/gain_check.h"
+#include "se3_sim/ground.h"
 #include "se3_sim/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
@@ -304,15 +305,32 @@ std::string SimulatorNodeImpl::scene_file(const std::string& arg, bool robot_giv
 }
 
 void SimulatorNodeImpl::configure() {
-  // The robot: robot_description (sim.launch's robot:= loads the file there; or loaded before
-  // by the user, e.g. xacro's output), else ~urdf_file, else the scene's robot.
-  const std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
-  std::string urdf_xml = get_text(nh_, "robot_description").value_or("");
-  const bool had_description = !urdf_xml.empty();
-  if (urdf_xml.empty() && !urdf_file.empty()) urdf_xml = read_file(urdf_file);
+  // The robot: ~urdf_file (sim.launch's robot:=), else robot_description (loaded by the user,
+  // e.g. xacro's output; sim.launch empties it unless use_robot_description), else the scene's
+  // robot.
+  std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
+  if (!urdf_file.empty() && urdf_file[0] != '/') {  // relative to where roslaunch runs
+    const std::string cwd = get_text(pnh_, "cwd").value_or("");
+    if (!cwd.empty()) urdf_file = cwd + "/" + urdf_file;
+  }
+  // ~urdf_file (robot:=) wins over the robot_description sim.launch loaded from it.
+  std::string urdf_xml =
+      urdf_file.empty() ? get_text(nh_, "robot_description").value_or("") : read_file(urdf_file);
+  const bool had_description = urdf_file.empty() && !urdf_xml.empty();
   const std::string scene_arg = get_text(pnh_, "scene").value_or("");
   const std::string scene_path = scene_arg.empty() ? "" : scene_file(scene_arg, !urdf_xml.empty());
   if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
+  // Relative mesh names: beside ~urdf_file (robot:=), or in robot_description_dir when the
+  // robot_description was loaded by the user; the renderer reads the same parameter.
+  if (had_description) {
+    scene_.urdf_dir = get_text(nh_, "robot_description_dir").value_or("");
+  } else {
+    const std::string& robot = !urdf_xml.empty() ? urdf_file : scene_.robot_path;
+    const std::size_t slash = robot.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? std::string(".") : robot.substr(0, slash);
+    if (!urdf_xml.empty()) scene_.urdf_dir = dir;
+    nh_.setParam("robot_description_dir", dir);
+  }
   // A scene of objects alone runs without a robot (an empty one: a fixed base without mass).
   const bool objects_only =
       urdf_xml.empty() && scene_.robot_path.empty() && !scene_.objects.empty();
@@ -366,6 +384,9 @@ void SimulatorNodeImpl::configure() {
   model_ = &sim_->model();
   const se3::Model& m = *model_;
   for (const auto& w : m.warnings) ROS_WARN("simulator: %s", w.c_str());
+  const std::string ground =
+      se3::ground_ignores_robot_warning(scene_, !(urdf_xml.empty() && scene_.robot_path.empty()));
+  if (!ground.empty()) ROS_WARN("simulator: %s", ground.c_str());
   set_initial_positions(initial);
   const std::string deep = sim_->deep_penetration_warning();
   if (!deep.empty()) ROS_WARN("simulator: %s", deep.c_str());
@@ -449,11 +470,15 @@ void SimulatorNodeImpl::set_initial_positions(
     }
   }
   if (!values.empty() || scene_.constraints.joint_limits) {
+    x.base = se3::base_on_ground(scene_, m, x, urdf_xml_);  // the new pose's lowest shape on it
     sim_->set_initial_state(x);
     sim_->reset();
     // Constraints anchor at (and project) the new initial state; controllers are set after.
     if (!scene_.constraints.empty()) {
-      sim_->set_constraints(scene_.constraints);
+      // The spec as set here, with the collision geometry ground: {from_collisions} needs.
+      se3::Scene as_set = scene_;
+      as_set.constraints.joint_limits_given = true;
+      sim_->set_constraints(se3::scene_constraints(as_set, sim_->model(), urdf_xml_));
       // set_constraints rebuilt the objects' own collision model without the robot's shapes:
       // the scene collision goes back on after it, as make_simulator orders them (sim.h).
       if (se3::uses_scene_collision(scene_)) {
@@ -470,11 +495,15 @@ void SimulatorNodeImpl::set_initial_positions(
 // ~controller_namespace, default this node's namespace); a name in both: the parameter
 // server's. Each listens on <namespace>/NAME/command.
 void SimulatorNodeImpl::setup_controllers() {
-  const std::string ns = get_text(pnh_, "controller_namespace").value_or("");
+  std::string ns = get_text(pnh_, "controller_namespace").value_or("");
+  const std::vector<std::string> names = get_names(pnh_, "controllers");
+  if (ns.empty()) ns = controllers_namespace(nh_, urdf_text_, *model_, names);
   ctl_nh_ = ns.empty() ? nh_ : ros::NodeHandle(nh_, ns);
   std::vector<se3::ControllerSpec> specs;
-  const std::vector<std::string> names = get_names(pnh_, "controllers");
-  const std::vector<se3::ControllerSpec> from_params = controllers_from_params(ctl_nh_, names);
+  // A controller that cannot be read fails alone, as Gazebo's spawner does it.
+  std::vector<std::string> failed;
+  std::vector<se3::ControllerSpec> from_params = controllers_from_params(ctl_nh_, names, &failed);
+  for (const std::string& e : failed) ROS_ERROR("simulator: controller not started: %s", e.c_str());
   for (const auto& s : scene_.controllers) {
     bool replaced = false;
     for (const auto& p : from_params) replaced = replaced || p.name == s.name;
@@ -488,8 +517,22 @@ void SimulatorNodeImpl::setup_controllers() {
     se3::set_interface_gains(
         specs, se3::parse_interface_gains(to_yaml(pid_gains), gz.resolveName("pid_gains")));
   }
-  // Each controller's interface against the joint's <transmission>s.
-  se3::check_interfaces(specs, se3::parse_transmissions(urdf_text_));
+  // Each controller's interface against the joint's <transmission>s, and its joints: the
+  // scene's must fit, one named in ~controllers that does not fails alone.
+  const auto transmissions = se3::parse_transmissions(urdf_text_);
+  for (auto it = specs.begin(); it != specs.end();) {
+    try {
+      se3::check_interfaces({*it}, transmissions);
+      if (std::find(names.begin(), names.end(), it->name) != names.end()) {
+        const se3::ControllerSet alone(sim_->model(), {*it});  // its joints and keys
+      }
+      ++it;
+    } catch (const se3::ControllerError& e) {
+      if (std::find(names.begin(), names.end(), it->name) == names.end()) throw;
+      ROS_ERROR("simulator: controller not started: %s", e.what());
+      it = specs.erase(it);
+    }
+  }
   sim_->set_controllers(specs);
   for (const std::string& w :
        se3::gain_stability_warnings(sim_->model(), sim_->state(), specs, sim_->dt())) {
@@ -1460,7 +1503,13 @@ void SimulatorNodeImpl::add_constraint_forces(const se3::ConstraintSystem& sys,
 // ------------------------------------------------------------------ public face
 
 SimulatorNode::SimulatorNode() : impl_(std::make_unique<SimulatorNodeImpl>()) {}
-SimulatorNode::~SimulatorNode() = default;
+// /use_sim_time is sim.launch's for the simulator's /clock: it goes with the simulator (after a
+// run or a failed start), so that a later node on the same master does not wait for a /clock
+// no one publishes.
+SimulatorNode::~SimulatorNode() {
+  bool sim_time = false;
+  if (ros::param::get("/use_sim_time", sim_time) && sim_time) ros::param::del("/use_sim_time");
+}
 bool SimulatorNode::init() {
   return impl_->init();
 }

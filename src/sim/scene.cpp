@@ -49,6 +49,7 @@ std::string package_root(std::string dir) {
 using Field = SceneReader::Field;
 
 void read_base_pose(const SceneReader& r, const Field& v, Scene& s) {
+  s.base_pose_given = true;
   for (const Field& p : r.fields(v, {"position", "orientation"})) {
     if (p.name == "position") {
       s.base_pose.p = r.vec3(p);
@@ -197,6 +198,8 @@ const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
       {"self_collision",
        [](const SceneReader& r, const Field& v, Scene& s) { s.self_collision = r.boolean(v); }},
       {"contact", read_contact},
+      {"robot_on_ground",
+       [](const SceneReader& r, const Field& v, Scene& s) { s.robot_on_ground = r.boolean(v); }},
   };
   return keys;
 }

@@ -3,6 +3,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -42,6 +43,14 @@ std::string package_root(const std::string& file) {
 
 }  // namespace
 
+GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
+                                   const std::string& urdf_xml) {
+  GeometryOptions gopt;
+  const std::string root = package_root(scene.robot_path.empty() ? scene.file : scene.robot_path);
+  if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
+  return scene_geometry(scene, model, urdf_xml, gopt);
+}
+
 SceneCollision scene_collision(const Scene& scene, const Model* model,
                                const GeometryModel* geometry, const std::string& urdf_xml) {
   std::vector<CollisionObject> objs;
@@ -58,11 +67,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
     robot_bodies = model->n + 1;
     GeometryModel loaded;
     if (!geometry) {
-      GeometryOptions gopt;
-      const std::string root =
-          package_root(scene.robot_path.empty() ? scene.file : scene.robot_path);
-      if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
-      loaded = scene_geometry(scene, *model, urdf_xml, gopt);
+      loaded = scene_robot_geometry(scene, *model, urdf_xml);
       geometry = &loaded;
     }
     warnings = geometry->warnings;
@@ -84,11 +89,24 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
         o.mu_own = true;
       }
       o.self_collide = gl->self_collide == 1;
+      // Contact stiffness and damping as ODE turns them into its error reduction at the step
+      // h: ERP = h kp / (h kp + kd) (Gazebo's defaults kp 1e12, kd 1 where one is not given).
+      if (!std::isnan(gl->kp) || !std::isnan(gl->kd)) {
+        const double kp = std::isnan(gl->kp) ? 1e12 : gl->kp;
+        const double kd = std::isnan(gl->kd) ? 1.0 : gl->kd;
+        const double hk = scene.dt * kp;
+        if (hk + kd > 0) o.erp = std::clamp(hk / (hk + kd), 0.0, 1.0);
+      }
+      if (gl->min_depth >= 0) o.slop = gl->min_depth;
+      if (gl->max_vel > 0) o.max_correction_velocity = gl->max_vel;
     };
     for (const GeometryObject& g : geometry->collisions) {
       if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
       if (g.shape.type == ShapeType::Mesh &&
           (!g.shape.mesh || g.shape.mesh->triangle_count() == 0)) {
+        // robot_on_ground (a robot from outside): the geometry's warning was given; the rest of
+        // the robot still stands on the ground.
+        if (scene.robot_on_ground) continue;
         // The geometry's warning names the link, the resource and why (not found, not a
         // regular file, unreadable, empty, no triangles).
         throw SceneError(scene_name(scene) + ": " +

@@ -7,7 +7,14 @@ namespace se3 {
 
 GeometryModel scene_geometry(const Scene& scene, const Model& model, const std::string& urdf_xml,
                              const GeometryOptions& opt) {
-  if (!urdf_xml.empty()) return geometry_from_urdf_string(model, urdf_xml, opt);
+  if (!urdf_xml.empty()) {
+    if (scene.urdf_dir.empty() || !opt.paths.base_dir.empty()) {
+      return geometry_from_urdf_string(model, urdf_xml, opt);
+    }
+    GeometryOptions with_dir = opt;
+    with_dir.paths.base_dir = scene.urdf_dir;
+    return geometry_from_urdf_string(model, urdf_xml, with_dir);
+  }
   if (scene.robot_path.empty()) return GeometryModel();  // objects only: no robot to draw
   if (scene.robot_path.compare(0, 6, "chain:") == 0) return chain_geometry(model);
   return geometry_from_urdf_file(model, scene.robot_path, opt);

@@ -8,6 +8,7 @@
 #include "lie/simd.h"
 #include "object_parts.h"
 #include "se3_sim/format.h"
+#include "se3_sim/ground.h"
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
@@ -254,6 +255,7 @@ void Simulator::set_controllers(const std::vector<ControllerSpec>& specs) {
   c->reset(state_);
   controllers_ = std::move(c);
   actuation_ = command_;
+  held_ = VecX::Zero(model_->nv);
 }
 
 void Simulator::apply_link_wrench(int link, const Vec3& point, const Vec6& wrench,
@@ -310,8 +312,33 @@ void add_link_wrench_force(const Model& model, const Data& data, int link, const
   }
 }
 
+std::vector<std::string> Simulator::set_links_without_gravity(
+    const std::vector<std::string>& links) {
+  std::vector<std::string> not_applied;
+  weightless_.clear();
+  for (const std::string& name : links) {
+    const int k = model_->link_index(name);
+    if (k < 0 || model_->links[k].fixed) {
+      not_applied.push_back(name);
+      continue;
+    }
+    const LinkFrame& L = model_->links[k];
+    const Inertia& I = model_->inertia[L.body];
+    if (!(I.m > 0)) continue;  // nothing to weigh
+    LinkWrench w;
+    w.link = k;
+    w.point = L.offset.inverse().act(I.h / I.m);  // the body's centre of mass, link frame
+    w.wrench.tail<3>() = -I.m * model_->gravity;
+    weightless_.push_back(w);
+  }
+  return not_applied;
+}
+
 void Simulator::add_link_wrenches(VecX& tau) {
   forward_kinematics(*model_, diag_, state_.base, state_.q);
+  for (const LinkWrench& w : weightless_) {
+    add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
+  }
   for (const LinkWrench& w : wrenches_) {
     add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
   }
@@ -328,14 +355,19 @@ const VecX& Simulator::step_forces() {
       next_expiry_ = std::min(next_expiry_, command_until_[k]);
     }
   }
-  if (!controllers_ && wrenches_.empty()) return command_;
+  if (!controllers_ && wrenches_.empty() && weightless_.empty()) return command_;
   const VecX* tau = &command_;
   if (controllers_) {
-    actuation_ = command_;
-    controllers_->update(state_, time_, config_.dt, actuation_);
+    if (control_every_ <= 1 || steps_ % control_every_ == 0) {
+      actuation_ = command_;
+      controllers_->update(state_, time_, config_.dt * control_every_, actuation_);
+      if (control_every_ > 1) held_ = actuation_ - command_;  // sized in set_controllers
+    } else {
+      actuation_ = command_ + held_;
+    }
     tau = &actuation_;
   }
-  if (wrenches_.empty()) return *tau;
+  if (wrenches_.empty() && weightless_.empty()) return *tau;
   forces_ = *tau;
   add_link_wrenches(forces_);
   return forces_;
@@ -839,7 +871,8 @@ bool uses_scene_collision(const Scene& scene) {
 
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml) {
   Model m = scene_model(scene, urdf_xml);
-  const State x = scene_state(scene, m);
+  State x = scene_state(scene, m);
+  x.base = base_on_ground(scene, m, x, urdf_xml);  // robot_on_ground: its lowest shape on it
   SimConfig cfg;
   cfg.integrator = scene.integrator;
   cfg.dt = scene.dt;
@@ -856,6 +889,7 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
         scene_collision(scene, &sim->model(), robot ? nullptr : &none, urdf_xml));
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
+  set_gazebo_gravity(*sim, scene_urdf_text(scene, urdf_xml));
   if (!scene.robot_name.empty() || !scene.robot_namespace.empty()) {
     sim->set_robot_name(scene.robot_name.empty() ? sim->robot_name() : scene.robot_name,
                         scene.robot_namespace);

@@ -53,8 +53,23 @@ std::vector<se3::ControllerSpec> controllers_from_xmlrpc(
     const std::vector<std::string>& names, const std::vector<XmlRpc::XmlRpcValue>& configs,
     const std::string& where);
 /// The controllers `names`, read from the parameter server under nh's namespace (NAME/type,
-/// NAME/joints, ...: a controller_config YAML loaded with rosparam). A missing one is an error.
-std::vector<se3::ControllerSpec> controllers_from_params(const ros::NodeHandle& nh,
-                                                         const std::vector<std::string>& names);
+/// NAME/joints, ...: a controller_config YAML loaded with rosparam). With `errors` null a
+/// controller that cannot be read (missing, unsupported type, bad keys) is an error; else it is
+/// left out and its one-line error appended there (as Gazebo's spawner fails that controller
+/// and starts the others).
+std::vector<se3::ControllerSpec> controllers_from_params(
+    const ros::NodeHandle& nh, const std::vector<std::string>& names,
+    std::vector<std::string>* errors = nullptr);
+/// Where controllers `names` not under nh are declared: the one namespace N of the parameter
+/// server with N/NAME/type for each of them (rrbot's YAML `rrbot: {joint1_position_controller:
+/// ...}` loaded at the root declares /rrbot). "" when each is under nh, or no one namespace
+/// holds them all (the error of controllers_from_params then says where it looked).
+std::string declared_controller_namespace(const ros::NodeHandle& nh,
+                                          const std::vector<std::string>& names);
+/// The controllers' namespace when ~controller_namespace is empty: the URDF's gazebo_ros_control
+/// <robotNamespace> (where Gazebo runs them) when the named controllers are there, else
+/// declared_controller_namespace (an info line says so), else "" (nh's).
+std::string controllers_namespace(const ros::NodeHandle& nh, const std::string& urdf_text,
+                                  const se3::Model& model, const std::vector<std::string>& names);
 
 }  // namespace se3_ros
