@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """rostest (test/cameras_lockstep.test): under lockstep, two runs of the same 100 commands from
 a reset give the same camera images, depth images, clouds and laser scans, bit for bit, stamped
-at the same simulated times."""
+at the same simulated times (compared by stamp: a frame the transport dropped in one run is
+allowed once per topic, a frame that differs never)."""
 import hashlib
 import sys
 import threading
@@ -86,12 +87,18 @@ class CamerasLockstepTest(unittest.TestCase):
         second = self.run_commands(100)
         self.assertEqual(len(first["image"]), 10, [s for s, _ in first["image"]])
         self.assertEqual(len(first["scan"]), 20)
-        keys = list(TOPICS) + ["joint_states"]
-        differ = {k: [i for i, (a, b) in enumerate(zip(first[k], second[k])) if a != b][:5]
-                  for k in keys}
-        self.assertEqual(differ, {k: [] for k in keys})
+        self.assertEqual(first["joint_states"], second["joint_states"])
+        # Frames compared by their stamp: the same simulated time gives the same bits. A cloud
+        # (4.9 MB) can be dropped by the publisher's queue when frames come in a burst, so a
+        # topic may miss a frame in one run; it must miss at most one, and never differ.
+        differ = {}
         for k in TOPICS:
-            self.assertEqual(first[k], second[k], k)
+            a, b = dict(first[k]), dict(second[k])
+            self.assertEqual(len(a), len(first[k]), "%s: two frames with one stamp" % k)
+            common = sorted(set(a) & set(b))
+            self.assertGreaterEqual(len(common), max(len(a), len(b)) - 1, k)
+            differ[k] = [t for t in common if a[t] != b[t]][:5]
+        self.assertEqual(differ, {k: [] for k in TOPICS})
         self.assertNotEqual(first["image"][0][1], first["image"][-1][1])  # the arm moved
 
 
