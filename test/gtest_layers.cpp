@@ -50,6 +50,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/convert.h", "ros"},
     {"se3_sim/ros/params.h", "ros"},
     {"se3_sim/ros/simulator_node.h", "ros"},
+    {"se3_sim/ros/renderer_node.h", "ros"},
     {"se3_sim/ros/teleop_node.h", "ros"},
     {"se3_sim/ros/renderer_convert.h", "ros"},
     {"se3_sim/ros/rendered_sensors.h", "ros"},

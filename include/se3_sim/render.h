@@ -2,7 +2,7 @@
 // triangle meshes) in linear perspective into a 1280x1024 RGB image, over a sky and a ground
 // grid that runs to the horizon (the painter's perspective of section 3.3 of Reuss 2002), with
 // markers, link frames and a text overlay. No roscpp here; the ROS node
-// (src/nodes/renderer_node.cpp) feeds it poses from TF.
+// (src/ros/renderer_node.cpp) feeds it poses from TF.
 //
 // ---- For `se3_dyn render MODEL.urdf [--floating] [--scene S] [--camera ...] --out frame.png`
 //
