@@ -160,6 +160,28 @@ TEST(Convert, PosesRoundTripAndBadQuaternionsAreRefused) {
   EXPECT_EQ(se3_ros::from_twist(se3_ros::to_twist(w)), w);
 }
 
+// A trajectory message as the trajectory controllers take it: every point's fields as sent.
+TEST(Convert, TrajectoryMessagesKeepEveryPointsFields) {
+  trajectory_msgs::JointTrajectory msg;
+  msg.joint_names = {"a", "b"};
+  msg.points.resize(2);
+  msg.points[0].positions = {0.1, 0.2};
+  msg.points[0].time_from_start = ros::Duration(0.5);
+  msg.points[1].positions = {0.3, -0.4};
+  msg.points[1].velocities = {1.0, 2.0};
+  msg.points[1].accelerations = {-3.0, 4.0};
+  msg.points[1].time_from_start = ros::Duration(1, 250000000);
+  const se3::TrajectoryCommand cmd = se3_ros::from_trajectory(msg);
+  EXPECT_EQ(cmd.joint_names, msg.joint_names);
+  ASSERT_EQ(cmd.points.size(), 2u);
+  EXPECT_EQ(cmd.points[0].time_from_start, 0.5);
+  EXPECT_EQ(cmd.points[0].positions, msg.points[0].positions);
+  EXPECT_TRUE(cmd.points[0].velocities.empty());
+  EXPECT_EQ(cmd.points[1].time_from_start, 1.25);
+  EXPECT_EQ(cmd.points[1].velocities, msg.points[1].velocities);
+  EXPECT_EQ(cmd.points[1].accelerations, msg.points[1].accelerations);
+}
+
 TEST(Convert, TorqueCommandsAreCheckedJointByJoint) {
   const se3::Scene s = se3::load_scene(kSource + "/config/scenes/satellite_arm.yaml");
   const se3::Model m = se3::scene_model(s);

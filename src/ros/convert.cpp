@@ -296,4 +296,19 @@ void append_object_markers(const std::vector<se3::SceneObject>& specs,
   }
 }
 
+se3::TrajectoryCommand from_trajectory(const trajectory_msgs::JointTrajectory& msg) {
+  se3::TrajectoryCommand cmd;
+  cmd.joint_names = msg.joint_names;
+  cmd.points.resize(msg.points.size());
+  for (size_t p = 0; p < msg.points.size(); ++p) {
+    const trajectory_msgs::JointTrajectoryPoint& in = msg.points[p];
+    se3::TrajectoryCommand::Point& out = cmd.points[p];
+    out.time_from_start = in.time_from_start.toSec();
+    out.positions = in.positions;
+    out.velocities = in.velocities;
+    out.accelerations = in.accelerations;
+  }
+  return cmd;
+}
+
 }  // namespace se3_ros

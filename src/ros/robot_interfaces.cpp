@@ -115,17 +115,7 @@ RobotInterfaces::RobotInterfaces(ros::NodeHandle nh, const se3::Simulator& sim,
         R.ctl_subs.push_back(rnh.subscribe<trajectory_msgs::JointTrajectory>(
             topic, 100,
             [this, &R, ci](const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
-              se3::TrajectoryCommand cmd;
-              cmd.joint_names = msg->joint_names;
-              cmd.points.resize(msg->points.size());
-              for (size_t p = 0; p < msg->points.size(); ++p) {
-                const trajectory_msgs::JointTrajectoryPoint& in = msg->points[p];
-                se3::TrajectoryCommand::Point& out = cmd.points[p];
-                out.time_from_start = in.time_from_start.toSec();
-                out.positions = in.positions;
-                out.velocities = in.velocities;
-                out.accelerations = in.accelerations;
-              }
+              se3::TrajectoryCommand cmd = from_trajectory(*msg);
               std::string why;
               with_sim_([&](se3::Simulator& s) {
                 // header.stamp is taken as simulated time when not zero (use_sim_time).

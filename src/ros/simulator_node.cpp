@@ -849,17 +849,7 @@ void SimulatorNodeImpl::on_single_command(int c, const std_msgs::Float64::ConstP
 // wall-clock time, taken as that far from now in simulated time (scaled by the real-time factor).
 void SimulatorNodeImpl::on_trajectory(int c,
                                       const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
-  se3::TrajectoryCommand cmd;
-  cmd.joint_names = msg->joint_names;
-  cmd.points.resize(msg->points.size());
-  for (size_t p = 0; p < msg->points.size(); ++p) {
-    const trajectory_msgs::JointTrajectoryPoint& in = msg->points[p];
-    se3::TrajectoryCommand::Point& out = cmd.points[p];
-    out.time_from_start = in.time_from_start.toSec();
-    out.positions = in.positions;
-    out.velocities = in.velocities;
-    out.accelerations = in.accelerations;
-  }
+  se3::TrajectoryCommand cmd = from_trajectory(*msg);
   std::unique_lock<TurnMutex> lock(mu_);
   const double now = sim_->time();
   if (!msg->header.stamp.isZero()) {

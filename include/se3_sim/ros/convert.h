@@ -8,6 +8,7 @@
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/Wrench.h>
 #include <sensor_msgs/JointState.h>
+#include <trajectory_msgs/JointTrajectory.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <string>
@@ -31,6 +32,9 @@ geometry_msgs::Twist to_twist(const se3::Vec6& v);
 /// A pose into an SE3: "" when usable, else why not (a non-finite number, or a quaternion whose
 /// norm is off 1 by more than 1e-3; within that it is normalized).
 std::string from_pose(const geometry_msgs::Pose& p, se3::SE3& out);
+/// A trajectory controller's command (its points' times from start, positions, velocities and
+/// accelerations as sent; the controller checks them).
+se3::TrajectoryCommand from_trajectory(const trajectory_msgs::JointTrajectory& msg);
 
 /// The joints a simulator reports: the model's moving joints (1..n, in order) and then its
 /// locked ones (names and fixed positions), as joint_states and chain_state list them.
