@@ -387,9 +387,10 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     // and frames are the node's own (docs/ros.md "Several robots").
     Scene& e = robots[0];
     if (!e.robot_namespace.empty()) {
-      r.fail(robots_line, "'robots[0].namespace': the first robot is the node's own robot (its "
-                          "topics are the node's, its frames its bare link names); give the "
-                          "others namespaces");
+      r.fail(robots_line,
+             "'robots[0].namespace': the first robot is the node's own robot (its "
+             "topics are the node's, its frames its bare link names); give the "
+             "others namespaces");
     }
     s.robot = e.robot;
     s.robot_path = e.robot_path;
