@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "object_parts.h"
 #include "se3_sim/limits.h"
 
 namespace se3 {
@@ -172,18 +173,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
   int next = robot_bodies;
   for (std::size_t j = 0; j < scene.objects.size(); ++j) {
     const SceneObject& so = scene.objects[j];
-    CollisionObject o;
-    o.name = so.name;
-    o.shape = so.shape;
-    o.group = 1;
-    o.mu = so.mu;
-    o.restitution = so.restitution;
-    if (so.is_static) {
-      o.frame = CollisionObject::kWorld;
-      o.placement = so.pose;
-    } else {
-      o.frame = next++;
-    }
+    const CollisionObject o = object_collider(so, so.is_static ? CollisionObject::kWorld : next++);
     sc.object_frame.push_back(o.frame);
     objs.push_back(o);
     scene_object.push_back(int(j));
