@@ -68,5 +68,12 @@ bool read_file(const std::string& path, std::string& out, std::string* why,
                std::size_t max_bytes = std::size_t(256) << 20, bool prefix = false);
 /// "" for a regular file that can be opened for reading, else what read_file would say.
 std::string not_a_regular_file(const std::string& path);
+/// The nearest folder at or above dir that holds a package.xml ("" if none): where a robot's or
+/// scene's package:// and relative meshes are looked for.
+std::string package_root(std::string dir);
+
+/// x with three significant figures ("1.5e+300"), for messages that quote an out-of-range value
+/// (std::to_string prints every digit).
+std::string three_figures(double x);
 
 }  // namespace se3

@@ -24,7 +24,8 @@
 
 namespace urdf {
 class ModelInterface;
-}
+class Pose;
+}  // namespace urdf
 
 namespace se3 {
 
@@ -238,6 +239,9 @@ UrdfDocument parse_urdf_document(const std::string& xml);
 /// Reads and parses a URDF file: only a regular file is read (read_file, limits.h); every
 /// error names the file.
 UrdfDocument read_urdf_document(const std::string& path);
+
+/// A URDF origin (urdfdom's Pose: position and unit quaternion) as a rigid transform.
+SE3 se3_from_urdf(const urdf::Pose& p);
 
 /// Builds a model from a parsed URDF. Throws ModelError with a one-line reason.
 Model model_from_urdf(const UrdfDocument& doc, const UrdfOptions& opt = {});

@@ -10,16 +10,16 @@ namespace se3 {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The ray's parameter interval [t0, t1] inside a convex solid; each clip narrows it.
 struct Span {
-  double t0 = -kInf, t1 = kInf;
+  double t0 = -kInfinity, t1 = kInfinity;
   bool empty() const { return !(t0 <= t1); }
   /// Keeps the t with a + t b <= 0 (a half-space along the ray).
   void clip(double a, double b) {
     if (b == 0) {
-      if (a > 0) t1 = -kInf;
+      if (a > 0) t1 = -kInfinity;
     } else if (b > 0) {
       t1 = std::min(t1, -a / b);
     } else {
@@ -30,7 +30,7 @@ struct Span {
 
 // Entry distance of a span: +Inf when missed, behind the origin, or the origin is inside.
 double entry(const Span& s) {
-  if (s.empty() || s.t1 < 0 || s.t0 < 0) return kInf;
+  if (s.empty() || s.t1 < 0 || s.t0 < 0) return kInfinity;
   return s.t0;
 }
 
@@ -49,7 +49,7 @@ Span sphere_span(double r, const Vec3& o, const Vec3& d) {
   const double disc = b * b - c;
   Span s;
   if (disc < 0) {
-    s.t0 = kInf;
+    s.t0 = kInfinity;
     return s;
   }
   const double q = std::sqrt(disc);
@@ -65,11 +65,11 @@ Span cylinder_span(double r, double h, const Vec3& o, const Vec3& d) {
   const double b = o.x() * d.x() + o.y() * d.y();
   const double c = o.x() * o.x() + o.y() * o.y() - r * r;
   if (a < 1e-300) {
-    if (c > 0) s.t0 = kInf;
+    if (c > 0) s.t0 = kInfinity;
   } else {
     const double disc = b * b - a * c;
     if (disc < 0) {
-      s.t0 = kInf;
+      s.t0 = kInfinity;
       return s;
     }
     const double q = std::sqrt(disc);
@@ -84,7 +84,7 @@ Span cylinder_span(double r, double h, const Vec3& o, const Vec3& d) {
 double local_distance(const CollisionObject& obj, const Vec3* normals, const double* offsets,
                       std::size_t planes, const Vec3& o, const Vec3& d) {
   if (obj.halfspace) {
-    if (o.z() <= 0 || d.z() >= 0) return kInf;
+    if (o.z() <= 0 || d.z() >= 0) return kInfinity;
     return -o.z() / d.z();
   }
   const Shape& sh = obj.shape;
@@ -100,15 +100,15 @@ double local_distance(const CollisionObject& obj, const Vec3* normals, const dou
       const Span parts[3] = {cylinder_span(sh.radius, h, o, d),
                              sphere_span(sh.radius, o - Vec3(0, 0, h), d),
                              sphere_span(sh.radius, o + Vec3(0, 0, h), d)};
-      double t = kInf;
+      double t = kInfinity;
       for (const Span& s : parts) {
-        if (!s.empty() && s.t0 < 0 && s.t1 >= 0) return kInf;  // the origin is inside
+        if (!s.empty() && s.t0 < 0 && s.t1 >= 0) return kInfinity;  // the origin is inside
         t = std::min(t, entry(s));
       }
       return t;
     }
     case ShapeType::Mesh: {
-      if (planes == 0) return kInf;
+      if (planes == 0) return kInfinity;
       Span s;
       for (std::size_t k = 0; k < planes && !s.empty(); ++k) {
         s.clip(normals[k].dot(o) - offsets[k], normals[k].dot(d));
@@ -116,7 +116,7 @@ double local_distance(const CollisionObject& obj, const Vec3* normals, const dou
       return entry(s);
     }
   }
-  return kInf;
+  return kInfinity;
 }
 
 void hull_planes(const ConvexHull& hull, std::vector<Vec3>& normals, std::vector<double>& offsets) {
@@ -152,7 +152,7 @@ double bounding_radius(const CollisionObject& obj, const ConvexHull* hull) {
       return r;
     }
   }
-  return kInf;
+  return kInfinity;
 }
 
 }  // namespace
@@ -193,14 +193,14 @@ LaserScanner::LaserScanner(const CollisionModel& model, const LaserSpec& spec)
     Shape s;
     s.object = i;
     const ConvexHull* hull = model.hull(i);
-    s.radius = objects[i].halfspace ? kInf : bounding_radius(objects[i], hull);
+    s.radius = objects[i].halfspace ? kInfinity : bounding_radius(objects[i], hull);
     if (objects[i].shape.type == ShapeType::Mesh && hull && !objects[i].halfspace) {
       hull_planes(*hull, s.normals, s.offsets);
     }
     shapes_.push_back(std::move(s));
   }
   const int n = std::max(spec_.samples, 1);
-  ranges_.assign(n, float(kInf));
+  ranges_.assign(n, float(kInfinity));
   poses_.resize(shapes_.size());
   near_.resize(shapes_.size());
   cos_.resize(n);
@@ -231,7 +231,7 @@ void LaserScanner::scan(const SE3& oMs, const std::vector<SE3>& frame_poses) {
   const double res = spec_.resolution;
   for (int k = 0; k < int(ranges_.size()); ++k) {
     const Vec3 d = cos_[k] * ex + sin_[k] * ey;
-    double best = kInf;
+    double best = kInfinity;
     for (std::size_t s = 0; s < shapes_.size(); ++s) {
       if (!near_[s]) continue;
       const Shape& sh = shapes_[s];
@@ -250,9 +250,9 @@ void LaserScanner::scan(const SE3& oMs, const std::vector<SE3>& frame_poses) {
     }
     double r;
     if (!(best <= spec_.range_max)) {
-      r = kInf;
+      r = kInfinity;
     } else if (best < spec_.range_min) {
-      r = -kInf;
+      r = -kInfinity;
     } else {
       r = res > 0 ? std::round(best / res) * res : best;
     }

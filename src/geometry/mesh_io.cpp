@@ -542,7 +542,7 @@ std::string serialize(const TriangleMesh* m, const std::string& error) {
   return b;
 }
 
-struct Reader {
+struct CacheReader {
   const std::string& b;
   std::size_t at = 0;
   bool ok = true;
@@ -581,7 +581,7 @@ struct Reader {
 };
 
 std::shared_ptr<TriangleMesh> deserialize(const std::string& b, std::string* error) {
-  Reader r{b};
+  CacheReader r{b};
   const uint32_t has = r.pod<uint32_t>();
   const std::string err = r.str();
   if (!r.ok) {

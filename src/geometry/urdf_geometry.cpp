@@ -16,12 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-SE3 to_se3(const urdf::Pose& p) {
-  double x, y, z, w;
-  p.rotation.getQuaternion(x, y, z, w);
-  return SE3(rotation_from_quaternion(x, y, z, w), Vec3(p.position.x, p.position.y, p.position.z));
-}
-
 // A frame whose z axis runs from a to b, centred between them.
 SE3 segment_frame(const Vec3& a, const Vec3& b) {
   const Vec3 z = (b - a).normalized();
@@ -34,7 +28,7 @@ SE3 segment_frame(const Vec3& a, const Vec3& b) {
   return SE3(R, 0.5 * (a + b));
 }
 
-struct Builder {
+struct GeometryBuilder {
   const Model& model;
   const urdf::ModelInterface& urdf;
   const GeometryOptions& opt;
@@ -108,7 +102,7 @@ struct Builder {
     GeometryObject o;
     o.link = link;
     o.body = body;
-    o.placement = O * to_se3(e->origin);
+    o.placement = O * se3_from_urdf(e->origin);
     std::string why;
     const bool ok = convert(e->geometry, o, &why);
     if constexpr (std::is_same_v<Element, urdf::Visual>) {
@@ -173,7 +167,7 @@ struct Builder {
       const SE3 O = li >= 0 ? model.links[li].offset : SE3();
       if (link) {
         for (const auto& j : link->child_joints) {
-          const Vec3 a = O.p, b = O.act(to_se3(j->parent_to_joint_origin_transform).p);
+          const Vec3 a = O.p, b = O.act(se3_from_urdf(j->parent_to_joint_origin_transform).p);
           const double len = (b - a).norm();
           if (!(len > 1e-4) || !std::isfinite(len)) continue;
           GeometryObject s = v;
@@ -207,7 +201,7 @@ GeometryModel geometry_from_urdf(const Model& model, const UrdfDocument& doc, Ge
   if (opt.paths.base_dir.empty() && !doc.file.empty()) {
     opt.paths.base_dir = fs::absolute(fs::path(doc.file)).parent_path().string();
   }
-  Builder b{model, *doc.urdf, opt, {}, {}};
+  GeometryBuilder b{model, *doc.urdf, opt, {}, {}};
   // Stand-in capsules scale with the robot: a fifth of its typical joint spacing.
   double sum = 0;
   int cnt = 0;

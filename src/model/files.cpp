@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 
 #include "se3_sim/limits.h"
@@ -95,6 +96,22 @@ bool read_file(const std::string& path, std::string& out, std::string* why, std:
   }
   ::close(fd);
   return true;
+}
+
+std::string package_root(std::string dir) {
+  for (int depth = 0; depth < 32 && !dir.empty(); ++depth) {
+    if (not_a_regular_file(dir + "/package.xml").empty()) return dir;
+    const auto slash = dir.find_last_of('/');
+    if (dir == "/" || slash == std::string::npos) break;
+    dir = slash == 0 ? "/" : dir.substr(0, slash);
+  }
+  return "";
+}
+
+std::string three_figures(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
 }
 
 }  // namespace se3

@@ -23,19 +23,13 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-SE3 to_se3(const urdf::Pose& p) {
-  double x, y, z, w;
-  p.rotation.getQuaternion(x, y, z, w);
-  return SE3(rotation_from_quaternion(x, y, z, w), Vec3(p.position.x, p.position.y, p.position.z));
-}
-
 // A rotation whose third column is the unit vector a (identity when a = e_z).
 Mat3 frame_with_z(const Vec3& a) {
   if ((a - Vec3::UnitZ()).norm() < 1e-15) return Mat3::Identity();
   return Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), a).toRotationMatrix();
 }
 
-struct Builder {
+struct ModelBuilder {
   const urdf::ModelInterface& urdf;
   const UrdfOptions& opt;
   Model m;
@@ -120,7 +114,7 @@ struct Builder {
          << " break the triangle inequality (physically inconsistent; kept as given)";
       m.warnings.push_back(os.str());
     }
-    const SE3 Tc = O * to_se3(in.origin);  // inertial frame in body frame
+    const SE3 Tc = O * se3_from_urdf(in.origin);  // inertial frame in body frame
     const Mat3 I_body = Tc.R * I * Tc.R.transpose();
     m.inertia[body] += Inertia::from_com(mass, Tc.p, I_body);
   }
@@ -159,7 +153,7 @@ struct Builder {
       const SE3 O = top.O;  // copies: enter() may move the stack
       const urdf::LinkConstSharedPtr child = urdf.getLink(j->child_link_name);
       if (!child) throw ModelError("joint '" + j->name + "': child link missing");
-      const SE3 T = O * to_se3(j->parent_to_joint_origin_transform);
+      const SE3 T = O * se3_from_urdf(j->parent_to_joint_origin_transform);
       Vec3 axis(j->axis.x, j->axis.y, j->axis.z);
       bool is_locked = false;
       const double ql = locked_position(j->name, is_locked);
@@ -230,7 +224,7 @@ const urdf::Link& base_link(const urdf::ModelInterface& u, const urdf::Link& roo
   const urdf::LinkConstSharedPtr child = u.getLink(j.child_link_name);
   if (!child) throw ModelError("joint '" + j.name + "': child link missing");
   m.floating = true;
-  m.X_tree[0] = to_se3(j.parent_to_joint_origin_transform);
+  m.X_tree[0] = se3_from_urdf(j.parent_to_joint_origin_transform);
   return *child;
 }
 
@@ -245,6 +239,12 @@ struct UrdfOwner {
 };
 
 }  // namespace
+
+SE3 se3_from_urdf(const urdf::Pose& p) {
+  double x, y, z, w;
+  p.rotation.getQuaternion(x, y, z, w);
+  return SE3(rotation_from_quaternion(x, y, z, w), Vec3(p.position.x, p.position.y, p.position.z));
+}
 
 UrdfDocument parse_urdf_document(const std::string& xml) {
   check_urdf_text(xml);  // urdf_guard.h: size and nesting before tinyxml recurses
@@ -298,7 +298,7 @@ Model model_from_urdf(const UrdfDocument& doc, const UrdfOptions& options) {
                                    [&](const auto& l) { return l.first == kv.first; });
     if (!given) opt.locked.push_back(kv);
   }
-  Builder b{u, opt, Model{}, {}};
+  ModelBuilder b{u, opt, Model{}, {}};
   for (const auto& kv : opt.locked) b.locked.emplace(kv.first, kv.second);
   b.m.warnings = doc.warnings;
   Model& m = b.m;

@@ -132,11 +132,9 @@ std::string check_torque_command(const se3::Model& m, const JointTable& joints,
   return "";
 }
 
-namespace {
 double finite_or_zero(double x) {
   return std::isfinite(x) ? x : 0.0;
 }
-}  // namespace
 
 void fill_joint_state(const se3::Model& m, const JointTable& joints, const se3::State& x,
                       const se3::VecX& efforts, sensor_msgs::JointState& js) {

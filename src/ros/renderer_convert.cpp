@@ -17,10 +17,6 @@ namespace se3 {
 namespace ros_renderer {
 namespace {
 
-bool finite(double x) {
-  return std::isfinite(x);
-}
-
 SE3 nan_pose() {
   return SE3(Mat3::Constant(std::nan("")), Vec3::Constant(std::nan("")));
 }
@@ -30,8 +26,8 @@ SE3 nan_pose() {
 SE3 to_se3(const geometry_msgs::Transform& t) {
   const auto& q = t.rotation;
   const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-  if (!(n > 1e-9) || !finite(n) || !finite(t.translation.x) || !finite(t.translation.y) ||
-      !finite(t.translation.z)) {
+  if (!(n > 1e-9) || !std::isfinite(n) || !std::isfinite(t.translation.x) ||
+      !std::isfinite(t.translation.y) || !std::isfinite(t.translation.z)) {
     return nan_pose();
   }
   return SE3(rotation_from_quaternion(q.x / n, q.y / n, q.z / n, q.w / n),
@@ -266,18 +262,18 @@ void append_markers(const visualization_msgs::Marker& m, const SE3& frame,
 }
 
 void apply_camera_command(const geometry_msgs::Twist& cmd, render::Camera& cam) {
-  const double zoom_delta = finite(cmd.linear.x) ? cmd.linear.x : 0.0;
+  const double zoom_delta = std::isfinite(cmd.linear.x) ? cmd.linear.x : 0.0;
   const double zoom = std::min(10.0, std::max(0.1, 1.0 - zoom_delta));
   const Vec3 right = cam.R_wc.col(0);
   Vec3 pan = Vec3::Zero();
-  if (finite(cmd.linear.y)) pan += cmd.linear.y * right;
-  if (finite(cmd.linear.z)) pan += cmd.linear.z * Vec3::UnitZ();
+  if (std::isfinite(cmd.linear.y)) pan += cmd.linear.y * right;
+  if (std::isfinite(cmd.linear.z)) pan += cmd.linear.z * Vec3::UnitZ();
   if (pan.allFinite() && pan.norm() < 100) {
     cam.eye += pan;
     cam.target += pan;
   }
-  cam.orbit(finite(cmd.angular.z) ? cmd.angular.z : 0.0,
-            finite(cmd.angular.y) ? cmd.angular.y : 0.0, zoom);
+  cam.orbit(std::isfinite(cmd.angular.z) ? cmd.angular.z : 0.0,
+            std::isfinite(cmd.angular.y) ? cmd.angular.y : 0.0, zoom);
 }
 
 sensor_msgs::CameraInfo camera_info(const render::Camera& cam, const std::string& frame,

@@ -67,10 +67,6 @@ std::string read_file(const std::string& path) {
   return text;
 }
 
-double finite_or_zero(double x) {
-  return std::isfinite(x) ? x : 0.0;
-}
-
 bool file_exists(const std::string& path) {
   return se3::not_a_regular_file(path).empty();
 }

@@ -181,9 +181,10 @@ std::string controller_name_problem(const std::string& name) {
 
 namespace {
 
-class Reader {
+class ControllerReader {
  public:
-  Reader(const std::string& where, const std::string& name) : where_(where), name_(name) {}
+  ControllerReader(const std::string& where, const std::string& name)
+      : where_(where), name_(name) {}
 
   /// "file:line" of a node ("file" when yaml-cpp has no mark).
   std::string at(const YAML::Node& n) const {
@@ -265,7 +266,7 @@ class Reader {
 namespace {
 
 // A trajectory controller's keys besides joints and gains (ros_controllers' names).
-void parse_trajectory_keys(const Reader& r, const YAML::Node& node, ControllerSpec& s) {
+void parse_trajectory_keys(const ControllerReader& r, const YAML::Node& node, ControllerSpec& s) {
   const size_t n = s.joints.size();
   s.constraints.trajectory.assign(n, 0.0);
   s.constraints.goal.assign(n, 0.0);
@@ -336,7 +337,7 @@ void parse_trajectory_keys(const Reader& r, const YAML::Node& node, ControllerSp
 
 ControllerSpec parse_controller(const std::string& name, const YAML::Node& node,
                                 const std::string& where) {
-  const Reader r(where, name);
+  const ControllerReader r(where, name);
   if (const std::string why = controller_name_problem(name); !why.empty()) {
     throw ControllerError(where + ": " + why);
   }
@@ -486,7 +487,7 @@ std::map<std::string, PidGains> parse_interface_gains(const YAML::Node& map,
                                                       const std::string& where) {
   std::map<std::string, PidGains> out;
   if (!map || map.IsNull()) return out;
-  const Reader r(where, "pid_gains");
+  const ControllerReader r(where, "pid_gains");
   if (!map.IsMap()) r.fail(map, "needs a map {JOINT: {p: ..., i: ..., d: ...}, ...}");
   for (const auto& kv : map) {
     const std::string j = kv.first.IsScalar() ? kv.first.Scalar() : std::string();

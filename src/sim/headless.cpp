@@ -70,13 +70,6 @@ void write_row(std::ofstream& out, Simulator& sim) {
   out << '\n';
 }
 
-// n as "1.5e+298" (std::to_string prints every digit).
-std::string figure(double n) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", n);
-  return buf;
-}
-
 // "chain:N" checked (1 <= N <= limits::kMaxBodies); a path is left to the URDF loader.
 void check_chain(const std::string& model) {
   if (model.compare(0, 6, "chain:") != 0) return;
@@ -97,7 +90,7 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   }
   if (o.dt < 0 || !std::isfinite(o.dt)) throw std::invalid_argument("dt must be positive");
   if (o.dt > 0 && o.dt < limits::kMinDt) {
-    throw std::invalid_argument("dt " + figure(o.dt) +
+    throw std::invalid_argument("dt " + three_figures(o.dt) +
                                 " s is below the smallest step, 1e-9 s (docs/robustness.md)");
   }
   if (o.tol < 0 || !std::isfinite(o.tol)) throw std::invalid_argument("tol must be positive");
@@ -125,23 +118,25 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   // The work asked for, before anything is built: steps, then steps x bodies.
   const double steps_asked = o.duration / scene.dt;
   if (!(steps_asked <= static_cast<double>(limits::kMaxSteps))) {
-    throw std::invalid_argument("duration / dt asks for " + figure(steps_asked) +
-                                " steps, more than the " + figure(limits::kMaxSteps) +
+    throw std::invalid_argument("duration / dt asks for " + three_figures(steps_asked) +
+                                " steps, more than the " + three_figures(limits::kMaxSteps) +
                                 " one run may take (docs/robustness.md)");
   }
   // A run rounds duration / dt to whole steps: one that would take none is a mistake (a dt
   // written in the wrong unit, a duration of 0), not a success.
   if (!(std::llround(steps_asked) >= 1)) {
     throw std::invalid_argument(
-        "duration " + figure(o.duration) + " s is less than half the step dt " + figure(scene.dt) +
+        "duration " + three_figures(o.duration) + " s is less than half the step dt " +
+        three_figures(scene.dt) +
         " s: the run would take no step (a duration of at least dt takes one)");
   }
 
   Model model = scene_model(scene);
   const double bodies = model.n + 1;
   if (steps_asked * bodies > o.max_body_steps) {
-    throw std::invalid_argument(figure(steps_asked) + " steps of " + std::to_string(model.n + 1) +
-                                " bodies are more than the " + figure(o.max_body_steps) +
+    throw std::invalid_argument(three_figures(steps_asked) + " steps of " +
+                                std::to_string(model.n + 1) + " bodies are more than the " +
+                                three_figures(o.max_body_steps) +
                                 " body-steps one run may take (docs/robustness.md)");
   }
   const State x0 = use_scene_state ? scene_state(scene, model) : random_state(model, o.seed);
@@ -208,10 +203,11 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
     // An adaptive stepper may take many internal steps per step: they count as work too.
     if (static_cast<double>(sim.substeps() + sim.rejected()) * bodies > o.max_body_steps) {
       r.stopped = true;
-      r.status = "stopped at t = " + figure(sim.time()) + " s: the adaptive stepper's " +
+      r.status = "stopped at t = " + three_figures(sim.time()) + " s: the adaptive stepper's " +
                  std::to_string(sim.substeps() + sim.rejected()) + " internal steps of " +
                  std::to_string(static_cast<long long>(bodies)) + " bodies passed the " +
-                 figure(o.max_body_steps) + " body-steps one run may take (docs/robustness.md)";
+                 three_figures(o.max_body_steps) +
+                 " body-steps one run may take (docs/robustness.md)";
       break;
     }
     // Diagnostics every step, outside the timed part.

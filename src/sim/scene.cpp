@@ -34,18 +34,6 @@ std::string dir_of(const std::string& path) {
   return path.substr(0, slash);
 }
 
-// The nearest directory at or above dir that holds package.xml ("" if none).
-std::string package_root(std::string dir) {
-  for (int depth = 0; depth < 32; ++depth) {
-    if (file_exists(dir + "/package.xml")) return dir;
-    if (dir == "/" || dir.empty()) break;
-    const std::string up = dir_of(dir);
-    if (up == dir) break;
-    dir = up;
-  }
-  return "";
-}
-
 using Field = SceneReader::Field;
 
 void read_base_pose(const SceneReader& r, const Field& v, Scene& s) {

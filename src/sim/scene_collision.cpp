@@ -27,19 +27,12 @@ std::string read_text(const std::string& path, const Scene& scene) {
   return text;
 }
 
-// The nearest folder at or above the scene's that holds package.xml ("" if none): se3_sim's
-// own robots' meshes are in its data/meshes.
-std::string package_root(const std::string& file) {
-  std::string dir = file;
-  for (int depth = 0; depth < 32; ++depth) {
-    const auto slash = dir.find_last_of('/');
-    if (slash == std::string::npos) return "";
-    dir = dir.substr(0, slash);
-    struct stat st;
-    if (::stat((dir + "/package.xml").c_str(), &st) == 0) return dir;
-    if (dir.empty()) return "";
-  }
-  return "";
+// The package folder of a robot or scene file (limits.h, package_root): se3_sim's own robots'
+// meshes are in its data/meshes.
+std::string package_root_of_file(const std::string& file) {
+  const auto slash = file.find_last_of('/');
+  if (slash == std::string::npos) return "";
+  return package_root(slash == 0 ? "/" : file.substr(0, slash));
 }
 
 }  // namespace
@@ -47,7 +40,8 @@ std::string package_root(const std::string& file) {
 GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
                                    const std::string& urdf_xml) {
   GeometryOptions gopt;
-  const std::string root = package_root(scene.robot_path.empty() ? scene.file : scene.robot_path);
+  const std::string root =
+      package_root_of_file(scene.robot_path.empty() ? scene.file : scene.robot_path);
   if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
   return scene_geometry(scene, model, urdf_xml, gopt);
 }

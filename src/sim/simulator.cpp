@@ -617,13 +617,6 @@ bool object_ok(const State& b, double lim) {
   return ok && is_rotation(b.base.R);
 }
 
-// x as "1.5e+300" (std::to_string prints every digit of 1e300).
-std::string figure(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
-
 }  // namespace
 
 // State::finite() with every rate within max_rate, in one pass over each vector; the same for
@@ -735,8 +728,8 @@ void Simulator::roll_back(const StepInfo& info) {
     if (!b.base.p.allFinite() || !is_rotation(b.base.R) || !b.v.allFinite()) {
       why = "object '" + name + "': non-finite pose or twist";
     } else {
-      why = "object '" + name + "': a rate of " + figure(b.v.cwiseAbs().maxCoeff()) +
-            " exceeds the limit " + figure(config_.guard.max_rate);
+      why = "object '" + name + "': a rate of " + three_figures(b.v.cwiseAbs().maxCoeff()) +
+            " exceeds the limit " + three_figures(config_.guard.max_rate);
     }
   } else if (!rates_ok()) {
     why = "a rate of " + num(state_.v.cwiseAbs().maxCoeff()) + " exceeds the limit " +

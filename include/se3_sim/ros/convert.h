@@ -22,6 +22,9 @@
 
 namespace se3_ros {
 
+/// x, or 0 when it is not finite: a published field never carries NaN or infinity.
+double finite_or_zero(double x);
+
 geometry_msgs::Transform to_transform(const se3::SE3& f);
 geometry_msgs::Pose to_pose(const se3::SE3& f);
 /// [N; F] (torque first, as the library) <-> geometry_msgs/Wrench.
