@@ -9,7 +9,8 @@ frame, none on /tf_static) and panda/joint_states within 0.5 s of the reply, whi
 joint_states have no gap longer than two periods; the world services and topics see it
 (get_entities: a robot with its namespace; get and set its state; model_states, link_states,
 sim_stats); deleting it stops its frames and joint_states and unadvertises its topics; the spawn
-tool (rosrun se3_sim spawn -urdf -param ...) spawns it again."""
+tool (rosrun se3_sim spawn -urdf -param ...) spawns it again, and a reset of the spawned entities
+deletes it; allow_renaming gives a robot a suffix."""
 import math
 import subprocess
 import sys
@@ -22,8 +23,8 @@ import rostest
 from geometry_msgs.msg import Pose, PoseStamped
 from sensor_msgs.msg import JointState
 from se3_sim.msg import EntityCategory, LinkStates, ModelStates, Resource, Result, SimStats
-from se3_sim.srv import (DeleteEntity, GetEntities, GetEntityState, SetEntityState, SpawnEntity,
-                         SpawnEntityResponse)
+from se3_sim.srv import (DeleteEntity, GetEntities, GetEntityState, ResetSimulation,
+                         ResetSimulationRequest, SetEntityState, SpawnEntity, SpawnEntityResponse)
 from tf2_msgs.msg import TFMessage
 
 PERIOD = 1.0 / 50  # the node's publish_rate
@@ -195,8 +196,15 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: self.models is not None and
                                       "panda" in self.models.name and self.links is not None and
                                       "panda::panda_hand" in self.links.name, 5.0))
+        # A name in use with allow_renaming: a suffix, and the namespace follows the name.
+        r = self.request(allow_renaming=True)
+        self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
+        self.assertEqual(r.entity_name, "panda_1")
+        self.assertEqual(self.names()["panda_1"], (EntityCategory.CATEGORY_ROBOT, "panda_1"))
+        d = self.delete(entity="panda_1")
+        self.assertEqual(d.result.result, Result.RESULT_OK, d.result.error_message)
         self.assertTrue(self.wait_for(lambda: self.stats is not None and
-                                      self.stats.spawned == 1, 5.0))
+                                      self.stats.spawned == 2 and self.stats.deleted == 1, 5.0))
 
     def test_3_delete_stops_frames_and_topics(self):
         self.assertIn("panda", self.names())
@@ -216,7 +224,7 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: self.models is not None and
                                       "panda" not in self.models.name, 5.0))
         self.assertTrue(self.wait_for(lambda: self.stats is not None and
-                                      self.stats.deleted == 1, 5.0))
+                                      self.stats.deleted == 2, 5.0))
         d = self.delete(entity="panda")
         self.assertEqual(d.result.result, Result.RESULT_NOT_FOUND)
 
@@ -234,8 +242,14 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertAlmostEqual(g.state.pose.position.x, -1, delta=0.01)
         yaw = 2 * math.atan2(g.state.pose.orientation.z, g.state.pose.orientation.w)
         self.assertAlmostEqual(yaw, 1.57, delta=1e-6)
-        d = self.delete(entity="panda2")
-        self.assertEqual(d.result.result, Result.RESULT_OK, d.result.error_message)
+        # A reset of the spawned entities deletes it, topics and all.
+        reset = rospy.ServiceProxy("simulator/reset_simulation", ResetSimulation)
+        r = reset(scope=ResetSimulationRequest.SCOPE_SPAWNED)
+        self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
+        self.assertNotIn("panda2", self.names())
+        topics = [t for t, _ in rospy.get_published_topics()]
+        self.assertNotIn("/arm2/joint_states", topics)
+        self.assertFalse(rospy.has_param("/arm2/robot_description"))
 
 
 if __name__ == "__main__":
