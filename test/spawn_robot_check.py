@@ -142,11 +142,18 @@ class SpawnRobotTest(unittest.TestCase):
         n = len(self.ur5_stamps)
         self.assertTrue(self.wait_for(lambda: len(self.ur5_stamps) > n + 5, 5.0))  # runs on
 
-    def test_2_spawn_from_parameter(self):
-        time.sleep(0.3)
-        t0 = time.time()
+    def largest_gap(self, start, end):
         with self.lock:
-            first = len(self.ur5_stamps)
+            stamps = [s for s in self.ur5_stamps if start <= s <= end]
+        self.assertGreater(len(stamps), 5)
+        return max(b - a for a, b in zip(stamps, stamps[1:]))
+
+    def test_2_spawn_from_parameter(self):
+        # The node's own jitter on this machine over a quiet second, for comparison.
+        q0 = time.time()
+        time.sleep(1.0)
+        quiet = self.largest_gap(q0, time.time())
+        t0 = time.time()
         r = self.request()
         t1 = time.time()
         self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
@@ -161,16 +168,13 @@ class SpawnRobotTest(unittest.TestCase):
                       "after the reply", t1 - t0, js_latency, tf_latency)
         self.assertLess(js_latency, 0.5)
         self.assertLess(tf_latency, 0.5)
-        # The UR5's stream over the spawn: no gap longer than two periods.
+        # The UR5's stream over the spawn: no gap longer than two periods (or than the largest
+        # of a quiet second when the machine's load makes those longer: the spawn adds none).
         time.sleep(0.3)
-        with self.lock:
-            stamps = [s for s in self.ur5_stamps[max(0, first - 2):]
-                      if t0 - 0.1 <= s <= t1 + 0.3]
-        self.assertGreater(len(stamps), 5)
-        gap = max(b - a for a, b in zip(stamps, stamps[1:]))
-        rospy.loginfo("UR5 joint_states: largest gap %.4f s over the spawn (period %.3f s)",
-                      gap, PERIOD)
-        self.assertLessEqual(gap, 2 * PERIOD + 0.002)
+        gap = self.largest_gap(t0 - 0.1, t1 + 0.3)
+        rospy.loginfo("UR5 joint_states: largest gap %.4f s over the spawn, %.4f s over a quiet "
+                      "second (period %.3f s)", gap, quiet, PERIOD)
+        self.assertLessEqual(gap, max(2 * PERIOD, quiet) + 0.002)
         # Every frame of it on /tf (none latched on /tf_static), its description set.
         with self.lock:
             self.assertFalse([c for c in self.static_children if c.startswith("panda/")])
