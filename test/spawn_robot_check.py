@@ -231,6 +231,13 @@ class SpawnRobotTest(unittest.TestCase):
                                       self.stats.deleted == 2, 5.0))
         d = self.delete(entity="panda")
         self.assertEqual(d.result.result, Result.RESULT_NOT_FOUND)
+        # From a file (a package:// URI) too.
+        r = self.request(name="panda_file", entity_resource=Resource(
+            uri="package://se3_sim/data/robots/panda.urdf", resource_string=""))
+        self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
+        self.assertTrue(self.wait_for(lambda: "panda_file/panda_link0" in self.tf_at, 5.0))
+        d = self.delete(entity="panda_file")
+        self.assertEqual(d.result.result, Result.RESULT_OK, d.result.error_message)
 
     def test_4_spawn_tool(self):
         out = subprocess.run(["rosrun", "se3_sim", "spawn", "-urdf", "-param", "panda_description",

@@ -215,8 +215,9 @@ struct WorldServices::Impl {
         }
         path = root + rest.substr(slash);
       }
+      // A URDF's bound (the larger; the scene reader bounds an object's YAML itself).
       std::string why;
-      if (!se3::read_file(path, yaml, &why, se3::limits::kMaxSceneBytes)) {
+      if (!se3::read_file(path, yaml, &why, se3::limits::kMaxUrdfBytes)) {
         fail(res.result, Srv::NO_RESOURCE, "entity_resource.uri '" + uri + "': " + why);
         return true;
       }
