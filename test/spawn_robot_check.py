@@ -205,10 +205,14 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
         self.assertEqual(r.entity_name, "panda_1")
         self.assertEqual(self.names()["panda_1"], (EntityCategory.CATEGORY_ROBOT, "panda_1"))
-        d = self.delete(entity="panda_1")
-        self.assertEqual(d.result.result, Result.RESULT_OK, d.result.error_message)
+        r = self.request(allow_renaming=True)
+        self.assertEqual(r.result.result, Result.RESULT_OK, r.result.error_message)
+        self.assertEqual(r.entity_name, "panda_2")
+        for name in ("panda_1", "panda_2"):
+            d = self.delete(entity=name)
+            self.assertEqual(d.result.result, Result.RESULT_OK, d.result.error_message)
         self.assertTrue(self.wait_for(lambda: self.stats is not None and
-                                      self.stats.spawned == 2 and self.stats.deleted == 1, 5.0))
+                                      self.stats.spawned == 3 and self.stats.deleted == 2, 5.0))
 
     def test_3_delete_stops_frames_and_topics(self):
         self.assertIn("panda", self.names())
@@ -228,7 +232,7 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: self.models is not None and
                                       "panda" not in self.models.name, 5.0))
         self.assertTrue(self.wait_for(lambda: self.stats is not None and
-                                      self.stats.deleted == 2, 5.0))
+                                      self.stats.deleted == 3, 5.0))
         d = self.delete(entity="panda")
         self.assertEqual(d.result.result, Result.RESULT_NOT_FOUND)
         # From a file (a package:// URI) too.

@@ -296,8 +296,14 @@ struct WorldServices::Impl {
     return true;
   }
 
-  // The simulator's prepare_spawn, which reads only what commits change (commits are serialized
-  // by edit_mu, held by the caller): no simulator lock needed while it builds.
+  static std::string urdf_robot_name(const std::string& urdf) {
+    try {
+      return se3::model_from_urdf_string(urdf).name;
+    } catch (const std::exception&) {
+      return "robot";
+    }
+  }
+
   // A URDF robot (spawn_entity with a <robot> resource): parsed and built off the simulator's
   // lock, its topics advertised off it too, both swapped in under it.
   bool spawn_robot(se3_sim::SpawnEntity::Request& req, se3_sim::SpawnEntity::Response& res,
@@ -325,16 +331,16 @@ struct WorldServices::Impl {
     se3::WorldEditPtr edit;
     std::string why;
     std::uint8_t code = Result::RESULT_OK;
+    std::string base;  // the name suffixes go on (allow_renaming)
     for (int suffix = 1; suffix <= 1000 && !edit; ++suffix) {
       try {
+        // Off the simulator's lock, as prepare() below.
         edit = sim->prepare_spawn_robot(spawn);
       } catch (const se3::WorldError& e) {
         if (e.kind == Kind::NameInUse && req.allow_renaming &&
             std::string(e.what()).compare(0, 5, "name ") == 0) {
-          if (spawn.name.empty()) {
-            spawn.name = se3::model_from_urdf_string(urdf).name;  // parses: it did above
-          }
-          const std::string base = req.name.empty() ? spawn.name : req.name;
+          // The URDF's robot name when the request has none (the URDF parsed a moment ago).
+          if (base.empty()) base = req.name.empty() ? urdf_robot_name(urdf) : req.name;
           spawn.name = base + "_" + std::to_string(suffix);
           continue;
         }
@@ -396,6 +402,8 @@ struct WorldServices::Impl {
     return true;
   }
 
+  // The simulator's prepare_spawn, which reads only what commits change (commits are serialized
+  // by edit_mu, held by the caller): no simulator lock needed while it builds.
   se3::WorldEditPtr prepare(const se3::SceneObject& o) {
     if (o.name == world_frame) {
       throw se3::WorldError(Kind::NameInvalid, "name '" + o.name + "' is the world frame's");
