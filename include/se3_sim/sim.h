@@ -574,15 +574,15 @@ class Simulator {
   /// one fails.
   bool step_extra_robots();
   void reset_extra_robots();
-  /// Rolls robots 1.. back to their last good states.
-  void roll_back_extra_robots();
-  ExtraRobot& extra(int k) const;
   /// Resets one robot 1.. to its initial state (reset_extra_robots does every one).
   void reset_extra_robot(ExtraRobot& r);
   /// Removes robot k >= 1 (a committed delete).
   void remove_robot(int k);
   /// commit() of a robot spawn or delete (src/sim/world.cpp).
   std::string commit_robot(WorldEdit& e);
+  /// Rolls robots 1.. back to their last good states.
+  void roll_back_extra_robots();
+  ExtraRobot& extra(int k) const;
   std::vector<std::unique_ptr<ExtraRobot>> extra_;
 
   std::string robot_name_, robot_ns_;
