@@ -14,6 +14,7 @@
 
 #include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
+#include "se3_sim/world.h"
 #include "test_util.h"
 
 extern "C" {
@@ -391,6 +392,25 @@ TEST(Alloc, SeveralRobotsStepsAllocateNothing) {
   sim->set_robot_joint_effort(0, 1, 5.0);
   ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
   EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+}
+
+// A robot spawned from its URDF at run time (world.h RobotSpawn) and deleted again: the steps
+// after the first one that follows each allocate nothing.
+TEST(Alloc, StepsAfterARobotSpawnOrDeleteAllocateNothing) {
+  auto sim =
+      make_simulator(load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/fixed_arm.yaml"));
+  ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
+  RobotSpawn panda;
+  std::string why;
+  ASSERT_TRUE(read_file(se3_test::robot_path("panda.urdf"), panda.urdf, &why)) << why;
+  panda.pose.p = Vec3(1, 0, 0);
+  panda.base = RobotSpawn::Base::Fixed;
+  sim->spawn_robot(panda);
+  ASSERT_EQ(sim->step_n(1), 1) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
+  sim->delete_model("panda");
+  ASSERT_EQ(sim->step_n(1), 1) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
 }
 
 // A trajectory controller (quintic segments, the effort flavour) on the UR5 and a velocity

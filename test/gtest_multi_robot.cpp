@@ -103,7 +103,9 @@ TEST(MultiRobot, SceneRobotsListMakesOneSystemPerRobot) {
               sim->spawn_object(parse_scene_object("shape: {sphere: 0.1}", ".", "<o>", "panda"));
             }),
             "");
-  EXPECT_NE(error_of([&] { sim->delete_model("panda"); }), "");
+  EXPECT_NE(error_of([&] { sim->delete_model("ur5"); }), "");  // robot 0 stays
+  sim->delete_model("panda");  // robots 1.. are deleted (gtest_spawn_robot)
+  EXPECT_EQ(sim->robot_count(), 1);
 }
 
 TEST(MultiRobot, EachCommandMovesOnlyItsRobot) {

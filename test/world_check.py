@@ -4,7 +4,7 @@
 The scene (test/data/world_scene.yaml): a fixed chain, a static table and a box on it, with
 sim time. Checks: the features; the entity list with categories; spawning an object from YAML
 text (it shows on model_states within 0.5 s and falls), with its refusals (name in use, bad
-name, malformed YAML, non-finite pose, a URDF) changing nothing; renaming; entity and link states
+name, malformed YAML, non-finite pose, a malformed URDF) changing nothing; renaming; entity and link states
 round-trip; stepping a paused simulation by N steps; reset of the world (time runs on) and of
 the simulation (time 0, spawned objects gone); delete; sim_stats counts; the spawn tool."""
 import math
@@ -171,7 +171,7 @@ class WorldTest(unittest.TestCase):
                 entity_resource=Resource(uri="", resource_string="name: x\nshape: {sphere: -1}\n"))
         refused(SpawnEntityResponse.INVALID_POSE, "initial_pose",
                 initial_pose=PoseStamped(pose=pose(float("nan"), 0, 1)), name="nan_ball")
-        refused(SpawnEntityResponse.UNSUPPORTED_FORMAT, "URDF",
+        refused(SpawnEntityResponse.RESOURCE_PARSE_ERROR, "entity_resource",
                 entity_resource=Resource(uri="", resource_string="<robot name='r'/>"))
         refused(SpawnEntityResponse.NO_RESOURCE, "entity_resource",
                 entity_resource=Resource(uri="", resource_string=""))

@@ -397,7 +397,16 @@ class Simulator {
   /// not a frame name, a non-finite or absurd pose or twist (|position| > 1e6 m, a rate above
   /// the guard's max_rate), a free object without a positive mass and inertia.
   WorldEditPtr prepare_spawn(const SceneObject& object) const;
-  /// Throws std::invalid_argument for an unknown model and for the robot (not deletable).
+  /// A robot spawn (src/sim/world.cpp): the URDF parsed and the model built here, off
+  /// the step; the commit adds it through add_robot (it steps from the next step on). Throws
+  /// WorldError (nothing changed), one line naming the field: `urdf` malformed or not a robot
+  /// the dynamics take (Kind::Resource), `name` in use or not a frame name, `namespace` in use
+  /// or not a ROS name, `pose` not finite, not a rotation or absurd.
+  WorldEditPtr prepare_spawn_robot(const RobotSpawn& spawn) const;
+  /// prepare_spawn_robot and commit; returns the robot's name.
+  std::string spawn_robot(const RobotSpawn& spawn);
+  /// Throws std::invalid_argument for an unknown model and for robot 0 (not deletable); robots
+  /// 1.. are deleted (the later ones move down one index).
   WorldEditPtr prepare_delete(const std::string& name) const;
   /// Applies a prepared edit: the objects kept keep their states, a spawned one starts at its
   /// pose and twist at the next step, time runs on. Throws std::invalid_argument (nothing
@@ -420,7 +429,8 @@ class Simulator {
   /// changed) for an unknown model, wrong sizes, a non-finite or absurd value, a twist for what
   /// cannot move. Accepted when it interpenetrates: returns interpenetration_report().
   std::string set_model_state(const std::string& name, const ModelState& state);
-  /// Every link's name: the robot's URDF links, then each object's (its name).
+  /// Every link's name: the robot's URDF links, then each object's (its name), then robots
+  /// 1..'s links as NAME::LINK.
   std::vector<std::string> link_names() const;
   /// A link's state in the world, or relative to link `reference` ("" for the world). Names
   /// are link names, or MODEL::LINK. Throws std::invalid_argument for an unknown link.
@@ -564,6 +574,12 @@ class Simulator {
   /// one fails.
   bool step_extra_robots();
   void reset_extra_robots();
+  /// Resets one robot 1.. to its initial state (reset_extra_robots does every one).
+  void reset_extra_robot(ExtraRobot& r);
+  /// Removes robot k >= 1 (a committed delete).
+  void remove_robot(int k);
+  /// commit() of a robot spawn or delete (src/sim/world.cpp).
+  std::string commit_robot(WorldEdit& e);
   /// Rolls robots 1.. back to their last good states.
   void roll_back_extra_robots();
   ExtraRobot& extra(int k) const;

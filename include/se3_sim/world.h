@@ -17,7 +17,7 @@ namespace se3 {
 /// A refused world request (a std::invalid_argument: one line naming the field), with its kind
 /// (the ROS layer's result codes follow it).
 struct WorldError : std::invalid_argument {
-  enum class Kind { NotFound, NameInUse, NameInvalid, InvalidPose, Invalid, Stale };
+  enum class Kind { NotFound, NameInUse, NameInvalid, InvalidPose, Invalid, Stale, Resource };
   WorldError(Kind k, const std::string& what) : std::invalid_argument(what), kind(k) {}
   Kind kind;
 };
@@ -56,6 +56,33 @@ struct WorldEditDeleter {
   void operator()(WorldEdit* edit) const;
 };
 using WorldEditPtr = std::unique_ptr<WorldEdit, WorldEditDeleter>;
+
+/// A robot to spawn at run time (Simulator::prepare_spawn_robot): a URDF, its model name and
+/// namespace, its base pose and whether the base is free or fixed. Its joints start at 0, each
+/// clamped into its position limits, at rest.
+struct RobotSpawn {
+  enum class Base {
+    FromUrdf,  ///< fixed when the URDF's root link is `world` or it says <static>true</static>
+    Free,
+    Fixed
+  };
+  std::string urdf;  ///< the URDF's XML text
+  std::string name;  ///< "": the URDF's robot name
+  std::string ns;    ///< its namespace (letters, digits, '_', '/'; "": none, the ROS layer's name)
+  SE3 pose;          ///< the base's pose in the world
+  Base base = Base::FromUrdf;
+  bool joint_limits = true;  ///< the joint-limit constraints, as a scene's robots have them
+};
+
+/// What a prepared edit does: the model it adds or removes ("" if none), whether that is a
+/// robot, and the robot's model a spawn adds (nullptr for the other edits; owned by the edit,
+/// valid until the commit).
+struct WorldEditInfo {
+  std::string spawned, deleted;
+  bool robot = false;
+  const Model* robot_model = nullptr;
+};
+WorldEditInfo edit_info(const WorldEditPtr& edit);
 
 /// An object from YAML text with the keys of one `objects:` entry of a scene (name, shape, mass,
 /// inertia, pose, twist, mu, restitution, color; scene_objects.cpp); mesh paths relative to

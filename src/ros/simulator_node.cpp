@@ -563,7 +563,7 @@ bool SimulatorNodeImpl::init() {
     t.header.stamp = ros::Time::now();
     fixed.push_back(t);
   }
-  if (sim_->robot_count() > 1) {
+  {  // robots 1.. of the scene, and those spawned later (world services)
     try {
       robots_ = std::make_unique<RobotInterfaces>(
           nh_, *sim_, scene_, world_frame_, max_effort_, max_wrench_,
@@ -671,6 +671,7 @@ void SimulatorNodeImpl::setup_world_services() {
                           : scene_.file.find('/') == std::string::npos
                               ? std::string(".")
                               : scene_.file.substr(0, scene_.file.find_last_of('/'));
+  h.robots = robots_.get();
   world_ = std::make_unique<WorldServices>(nh_, pnh_, std::move(h), world_frame_, dir);
 }
 

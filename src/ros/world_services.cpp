@@ -144,14 +144,25 @@ struct WorldServices::Impl {
   }
 
   // A prepared edit committed under the node's lock; "" or the refusal. *report: the
-  // interpenetration the new world starts with.
+  // interpenetration the new world starts with. *robot: a spawned robot's interface to insert
+  // with the commit; out: a deleted robot's, for discard() off the lock (or the spawned one's
+  // when the commit failed).
   std::string commit(se3::WorldEditPtr edit, std::string* report, std::size_t* objects_before,
-                     std::size_t* objects_after) {
+                     std::size_t* objects_after, RobotInterfaces::RobotPtr* robot = nullptr) {
     std::string why;
+    const se3::WorldEditInfo info = se3::edit_info(edit);
     hooks.with_sim([&](se3::Simulator& sim) {
       *objects_before = sim.object_specs().size();
       try {
         *report = sim.commit(std::move(edit));
+        if (info.robot && hooks.robots && robot) {
+          if (*robot) {
+            hooks.robots->insert(std::move(*robot), sim);
+            robot->reset();
+          } else if (!info.deleted.empty()) {
+            *robot = hooks.robots->remove(info.deleted, sim);
+          }
+        }
       } catch (const std::exception& e) {
         why = e.what();
       }
@@ -169,11 +180,6 @@ struct WorldServices::Impl {
            "entity_resource: neither uri nor resource_string is given");
       return true;
     }
-    if (!req.entity_namespace.empty()) {
-      fail(res.result, Srv::NAMESPACE_INVALID,
-           "entity_namespace: objects have no namespace (robots are not spawned yet)");
-      return true;
-    }
     if (!is_world(req.initial_pose.header.frame_id)) {
       fail(res.result, Result::RESULT_FEATURE_UNSUPPORTED,
            "initial_pose.header.frame_id '" + req.initial_pose.header.frame_id +
@@ -181,7 +187,21 @@ struct WorldServices::Impl {
       return true;
     }
     std::string yaml = text, source = "resource_string", dir = base_dir;
-    if (yaml.empty()) {
+    if (yaml.empty() && uri.compare(0, 6, "param:") == 0) {
+      // The name of a parameter holding the text (as spawn_model -param reads it).
+      const std::string param = uri.substr(6);
+      bool got = false;
+      try {
+        got = !param.empty() && nh.getParam(param, yaml);
+      } catch (const ros::InvalidNameException&) {
+      }
+      if (!got || yaml.empty()) {
+        fail(res.result, Srv::NO_RESOURCE,
+             "entity_resource.uri '" + uri + "': no parameter of that name holding text");
+        return true;
+      }
+      source = "parameter " + nh.resolveName(param);
+    } else if (yaml.empty()) {
       std::string path = uri;
       if (path.compare(0, 7, "file://") == 0) path = path.substr(7);
       if (path.compare(0, 10, "package://") == 0) {
@@ -195,8 +215,9 @@ struct WorldServices::Impl {
         }
         path = root + rest.substr(slash);
       }
+      // A URDF's bound (the larger; the scene reader bounds an object's YAML itself).
       std::string why;
-      if (!se3::read_file(path, yaml, &why, se3::limits::kMaxSceneBytes)) {
+      if (!se3::read_file(path, yaml, &why, se3::limits::kMaxUrdfBytes)) {
         fail(res.result, Srv::NO_RESOURCE, "entity_resource.uri '" + uri + "': " + why);
         return true;
       }
@@ -204,10 +225,10 @@ struct WorldServices::Impl {
       const auto slash = path.find_last_of('/');
       if (slash != std::string::npos) dir = path.substr(0, slash);
     }
-    if (yaml.find("<robot") != std::string::npos) {
-      fail(res.result, Srv::UNSUPPORTED_FORMAT,
-           "entity_resource: a URDF robot; se3_sim spawns objects (YAML of a scene object) for "
-           "now");
+    if (yaml.find("<robot") != std::string::npos) return spawn_robot(req, res, yaml, source);
+    if (!req.entity_namespace.empty()) {
+      fail(res.result, Srv::NAMESPACE_INVALID,
+           "entity_namespace: objects have no namespace (only a URDF robot takes one)");
       return true;
     }
     std::lock_guard<std::mutex> edit_lock(edit_mu);
@@ -275,6 +296,112 @@ struct WorldServices::Impl {
     return true;
   }
 
+  static std::string urdf_robot_name(const std::string& urdf) {
+    try {
+      return se3::model_from_urdf_string(urdf).name;
+    } catch (const std::exception&) {
+      return "robot";
+    }
+  }
+
+  // A URDF robot (spawn_entity with a <robot> resource): parsed and built off the simulator's
+  // lock, its topics advertised off it too, both swapped in under it.
+  bool spawn_robot(se3_sim::SpawnEntity::Request& req, se3_sim::SpawnEntity::Response& res,
+                   const std::string& urdf, const std::string& source) {
+    using Srv = se3_sim::SpawnEntity::Response;
+    if (!hooks.robots) {
+      fail(res.result, Srv::UNSUPPORTED_FORMAT,
+           "entity_resource: a URDF robot; this node does not spawn robots");
+      return true;
+    }
+    se3::RobotSpawn spawn;
+    spawn.urdf = urdf;
+    spawn.name = req.name;
+    spawn.ns = req.entity_namespace;
+    if (!all_zero(req.initial_pose.pose)) {
+      const std::string why = from_pose(req.initial_pose.pose, spawn.pose);
+      if (!why.empty()) {
+        fail(res.result, Srv::INVALID_POSE, "initial_pose: " + why);
+        return true;
+      }
+    }
+    std::lock_guard<std::mutex> edit_lock(edit_mu);
+    const se3::Simulator* sim = nullptr;
+    hooks.with_sim([&](se3::Simulator& s) { sim = &s; });
+    se3::WorldEditPtr edit;
+    std::string why;
+    std::uint8_t code = Result::RESULT_OK;
+    std::string base;  // the name suffixes go on (allow_renaming)
+    for (int suffix = 1; suffix <= 1000 && !edit; ++suffix) {
+      try {
+        // Off the simulator's lock, as prepare() below.
+        edit = sim->prepare_spawn_robot(spawn);
+      } catch (const se3::WorldError& e) {
+        if (e.kind == Kind::NameInUse && req.allow_renaming &&
+            std::string(e.what()).compare(0, 5, "name ") == 0) {
+          // The URDF's robot name when the request has none (the URDF parsed a moment ago).
+          if (base.empty()) base = req.name.empty() ? urdf_robot_name(urdf) : req.name;
+          spawn.name = base + "_" + std::to_string(suffix);
+          continue;
+        }
+        // The request's field, then the library's line (which names its own field).
+        why = e.what();
+        const bool ns = why.compare(0, 10, "namespace ") == 0;
+        switch (e.kind) {
+          case Kind::Resource:
+            code = Srv::RESOURCE_PARSE_ERROR;
+            why = "entity_resource (" + source + "): " + why;
+            break;
+          case Kind::NameInUse:
+          case Kind::NameInvalid:
+            code = ns                          ? Srv::NAMESPACE_INVALID
+                   : e.kind == Kind::NameInUse ? Srv::NAME_NOT_UNIQUE
+                                               : Srv::NAME_INVALID;
+            why = (ns ? "entity_namespace: " : "name: ") + why;
+            break;
+          case Kind::InvalidPose:
+            code = Srv::INVALID_POSE;
+            why = "initial_pose: " + why;
+            break;
+          default:
+            code = Result::RESULT_OPERATION_FAILED;
+        }
+        break;
+      } catch (const std::exception& e) {
+        why = e.what();
+        code = Result::RESULT_OPERATION_FAILED;
+        break;
+      }
+    }
+    if (!edit) {
+      fail(res.result, code, why.empty() ? "name: no free name" : why);
+      return true;
+    }
+    const se3::WorldEditInfo info = se3::edit_info(edit);
+    RobotInterfaces::RobotPtr robot;
+    try {
+      robot = hooks.robots->prepare(*info.robot_model, info.spawned, spawn.ns, urdf);
+    } catch (const std::exception& e) {
+      fail(res.result, Srv::NAMESPACE_INVALID,
+           "entity_namespace '" + req.entity_namespace + "': " + e.what());
+      return true;
+    }
+    std::string report;
+    std::size_t before = 0, after = 0;
+    why = commit(std::move(edit), &report, &before, &after, &robot);
+    if (!why.empty()) {
+      hooks.robots->discard(std::move(robot));
+      fail(res.result, Result::RESULT_OPERATION_FAILED, why);
+      return true;
+    }
+    spawned.push_back(info.spawned);
+    res.entity_name = info.spawned;
+    ok(res.result, report);
+    ROS_INFO("simulator: spawned robot '%s' (%s)%s%s", info.spawned.c_str(), source.c_str(),
+             report.empty() ? "" : ": ", report.c_str());
+    return true;
+  }
+
   // The simulator's prepare_spawn, which reads only what commits change (commits are serialized
   // by edit_mu, held by the caller): no simulator lock needed while it builds.
   se3::WorldEditPtr prepare(const se3::SceneObject& o) {
@@ -301,7 +428,9 @@ struct WorldServices::Impl {
     }
     std::string report;
     std::size_t before = 0, after = 0;
-    const std::string why = commit(std::move(edit), &report, &before, &after);
+    RobotInterfaces::RobotPtr robot;
+    const std::string why = commit(std::move(edit), &report, &before, &after, &robot);
+    if (hooks.robots) hooks.robots->discard(std::move(robot));  // off the lock
     if (!why.empty()) {
       fail(res.result, Result::RESULT_OPERATION_FAILED, why);
       return true;
@@ -321,12 +450,18 @@ struct WorldServices::Impl {
       return true;
     }
     std::vector<se3::WorldModel> models;
-    hooks.with_sim([&](se3::Simulator& sim) { models = sim.world_models(); });
+    std::string robot0;
+    hooks.with_sim([&](se3::Simulator& sim) {
+      models = sim.world_models();
+      robot0 = sim.robot_name();
+    });
     for (const se3::WorldModel& m : models) {
       if (!passes(m, names, req.filters.categories)) continue;
       res.entities.push_back(m.name);
       res.categories.push_back(category_of(m));
-      res.namespaces.push_back(m.ns);
+      // A robot 1.. without a namespace has its topics under its name (robot_interfaces.h).
+      const bool named = m.kind == "robot" && m.ns.empty() && m.name != robot0;
+      res.namespaces.push_back(named ? m.name : m.ns);
     }
     ok(res.result);
     return true;
@@ -462,7 +597,9 @@ struct WorldServices::Impl {
       }
       std::string report;
       std::size_t before = 0, after = 0;
-      why = commit(std::move(edit), &report, &before, &after);
+      RobotInterfaces::RobotPtr robot;
+      why = commit(std::move(edit), &report, &before, &after, &robot);
+      if (hooks.robots) hooks.robots->discard(std::move(robot));
       if (!why.empty()) return why;
       delete_markers(after, before);
     }
@@ -523,10 +660,11 @@ struct WorldServices::Impl {
                              F::SIMULATION_STATE_PAUSE,
                              F::STEP_SIMULATION_SINGLE,
                              F::STEP_SIMULATION_MULTIPLE};
-    res.features.spawn_formats = {"se3_sim_object"};
+    res.features.spawn_formats = {"se3_sim_object", "urdf"};
     res.features.custom_info =
         "se3_sim world services (docs/ros.md): objects spawn from the YAML keys of a scene's "
-        "objects: entry; links are entities named MODEL::LINK";
+        "objects: entry, robots from a URDF (uri param:NAME: a parameter holding it); links are "
+        "entities named MODEL::LINK";
     return true;
   }
 
@@ -603,7 +741,9 @@ struct WorldServices::Impl {
       const bool object = std::find(models_msg.name.begin(), models_msg.name.end(), link) !=
                               models_msg.name.end() &&
                           link != robot;
-      const std::string full = (object ? link : robot) + "::" + link;
+      const std::string full = link.find("::") != std::string::npos  // a robot 1..'s
+                                   ? link
+                                   : (object ? link : robot) + "::" + link;
       const se3::LinkState s = sim.link_state(full);
       links_msg.name.push_back(full);
       links_msg.pose.push_back(to_pose(s.pose));

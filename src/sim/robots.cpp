@@ -76,7 +76,7 @@ int Simulator::add_robot(const std::string& name, const std::string& ns, Model m
   r->actuation = VecX::Zero(m.nv);
   if (!controllers.empty()) r->controllers = std::make_unique<ControllerSet>(m, controllers);
   extra_.push_back(std::move(r));
-  reset_extra_robots();
+  reset_extra_robot(*extra_.back());  // the others run on (a robot spawned at run time)
   return robot_count() - 1;
 }
 
@@ -211,17 +211,22 @@ void Simulator::roll_back_extra_robots() {
 }
 
 void Simulator::reset_extra_robots() {
-  for (const auto& rp : extra_) {
-    ExtraRobot& r = *rp;
-    r.state = r.initial;
-    r.last_good = r.initial;
-    r.command.setZero();
-    r.actuation.setZero();
-    if (r.constraints_start)
-      r.constraints = std::make_unique<ConstraintSystem>(*r.constraints_start);
-    if (r.controllers) r.controllers->reset(r.state);
-    r.stepper->restart();
-  }
+  for (const auto& rp : extra_) reset_extra_robot(*rp);
+}
+
+void Simulator::reset_extra_robot(ExtraRobot& r) {
+  r.state = r.initial;
+  r.last_good = r.initial;
+  r.command.setZero();
+  r.actuation.setZero();
+  if (r.constraints_start) r.constraints = std::make_unique<ConstraintSystem>(*r.constraints_start);
+  if (r.controllers) r.controllers->reset(r.state);
+  r.stepper->restart();
+}
+
+void Simulator::remove_robot(int k) {
+  extra(k);  // checks k
+  extra_.erase(extra_.begin() + (k - 1));
 }
 
 void add_scene_robots(Simulator& sim, const Scene& scene) {

@@ -2,6 +2,7 @@
 // model and link states.
 #include "se3_sim/world.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -89,7 +90,24 @@ struct WorldEdit {
   std::unique_ptr<CollisionModel> collision;
   std::unique_ptr<SceneCollision> scene_collision;
   std::unique_ptr<ConstraintSystem> constraints, constraints_start;
+  // A robot edit (the objects untouched): the spawned robot's model and state (robot_model set),
+  // or the deleted robot (deleted its name).
+  bool robot = false;
+  std::unique_ptr<Model> robot_model;
+  State robot_initial;
+  std::string robot_ns;
+  bool joint_limits = true;
 };
+
+WorldEditInfo edit_info(const WorldEditPtr& edit) {
+  WorldEditInfo i;
+  if (!edit) return i;
+  i.spawned = edit->spawned;
+  i.deleted = edit->deleted;
+  i.robot = edit->robot;
+  i.robot_model = edit->robot_model.get();
+  return i;
+}
 
 void WorldEditDeleter::operator()(WorldEdit* edit) const {
   delete edit;
@@ -171,9 +189,15 @@ WorldEditPtr Simulator::prepare_spawn(const SceneObject& o) const {
 }
 
 WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
-  if (robot_index(name) >= 0) {
+  if (const int k = robot_index(name); k == 0) {
     throw WorldError(WorldError::Kind::Invalid,
-                     "name '" + name + "' is a robot's, which cannot be deleted");
+                     "name '" + name + "' is the simulator's first robot, which cannot be deleted");
+  } else if (k > 0) {
+    WorldEditPtr e(new WorldEdit);
+    e->generation = world_generation_;
+    e->robot = true;
+    e->deleted = name;
+    return e;
   }
   const int j = object_index(name);
   if (j < 0) throw WorldError(WorldError::Kind::NotFound, "name '" + name + "': no such model");
@@ -292,6 +316,7 @@ std::string Simulator::commit(WorldEditPtr e) {
     throw WorldError(WorldError::Kind::Stale,
                      "the world changed since the edit was prepared; prepare it again");
   }
+  if (e->robot) return commit_robot(*e);
   const size_t nb = e->bodies.size();
   std::vector<State> states(nb), last_good(nb);
   for (size_t j = 0; j < nb; ++j) {
@@ -431,6 +456,9 @@ std::vector<std::string> Simulator::link_names() const {
     for (const LinkFrame& L : model_->links) out.push_back(L.name);
   }
   for (const SceneObject& o : object_specs_) out.push_back(o.name);
+  for (const auto& r : extra_) {
+    for (const LinkFrame& L : r->model->links) out.push_back(r->name + "::" + L.name);
+  }
   return out;
 }
 
@@ -443,19 +471,26 @@ LinkState Simulator::link_state(const std::string& link, const std::string& refe
       model = full.substr(0, sep);
       name = full.substr(sep + 2);
     }
+    // Link k of a robot (its model, workspace and state).
+    auto robot_link = [](const Model& m, Data& d, const State& x, int k) {
+      forward_kinematics(m, d, x.base, x.q, x.v);
+      const LinkFrame& L = m.links[k];
+      const SE3& B = d.oMb[L.body];
+      const Vec6& V = d.V[L.body];
+      LinkState s;
+      s.pose = B * L.offset;
+      s.twist.head<3>() = B.R * V.head<3>();
+      s.twist.tail<3>() = B.R * (V.tail<3>() + V.head<3>().cross(L.offset.p));
+      return s;
+    };
     if (!robot_name_.empty() && (model.empty() || model == robot_name_)) {
       const int k = model_->link_index(name);
-      if (k >= 0) {
-        forward_kinematics(*model_, diag_, state_.base, state_.q, state_.v);
-        const LinkFrame& L = model_->links[k];
-        const SE3& B = diag_.oMb[L.body];
-        const Vec6& V = diag_.V[L.body];
-        LinkState s;
-        s.pose = B * L.offset;
-        s.twist.head<3>() = B.R * V.head<3>();
-        s.twist.tail<3>() = B.R * (V.tail<3>() + V.head<3>().cross(L.offset.p));
-        return s;
-      }
+      if (k >= 0) return robot_link(*model_, diag_, state_, k);
+    }
+    if (const int r = model.empty() ? -1 : robot_index(model); r >= 1) {
+      ExtraRobot& R = extra(r);
+      const int k = R.model->link_index(name);
+      if (k >= 0) return robot_link(*R.model, R.diag, R.state, k);
     }
     const int j = object_index(name);
     if (j >= 0 && (model.empty() || model == name)) {
@@ -509,6 +544,23 @@ std::string Simulator::set_link_state(const std::string& link, const LinkState& 
       return set_model_state(robot_name_, m);
     }
   }
+  if (const int r = model.empty() ? -1 : robot_index(model); r >= 1) {
+    const Model& m = robot_model(r);
+    const int k = m.link_index(name);
+    if (k >= 0) {
+      const LinkFrame& L = m.links[k];
+      if (L.body != 0 || !L.offset.R.isIdentity(0) || !L.offset.p.isZero(0)) {
+        throw WorldError(WorldError::Kind::Invalid,
+                         "link '" + link +
+                             "' is not the robot's root link: its pose follows from the "
+                             "joints (set the model state instead)");
+      }
+      ModelState ms = model_state(model);
+      ms.pose = s.pose;
+      ms.twist = s.twist;
+      return set_model_state(model, ms);
+    }
+  }
   throw WorldError(WorldError::Kind::NotFound, "link '" + link + "': no such link");
 }
 
@@ -531,6 +583,115 @@ void Simulator::reset_world() {
   reset();
   time_ = last_checked_time_ = t;
   steps_ = last_checked_steps_ = n;
+}
+
+namespace {
+
+// A ROS namespace as the robot's topics take it: letters, digits, '_' and '/', no name part
+// starting with a digit.
+bool namespace_ok(const std::string& ns) {
+  bool start = true;
+  for (char c : ns) {
+    const bool alpha = std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+    const bool digit = std::isdigit(static_cast<unsigned char>(c));
+    if (c == '/') {
+      start = true;
+    } else if (alpha || (digit && !start)) {
+      start = false;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
+  using K = WorldError::Kind;
+  if (sp.urdf.empty()) throw WorldError(K::Resource, "urdf is empty");
+  Model m;
+  try {
+    const UrdfDocument doc = parse_urdf_document(sp.urdf);
+    UrdfOptions opt;
+    opt.floating = sp.base == RobotSpawn::Base::Free ||
+                   (sp.base == RobotSpawn::Base::FromUrdf && doc.gazebo.is_static != 1);
+    m = model_from_urdf(doc, opt);
+    // A URDF bolted to a link named world (as Gazebo fixes a robot): a fixed base.
+    if (sp.base == RobotSpawn::Base::FromUrdf && opt.floating && !m.links.empty() &&
+        m.links[0].name == "world") {
+      opt.floating = false;
+      m = model_from_urdf(doc, opt);
+    }
+    m.gravity = model_->gravity;
+    m.validate();
+  } catch (const std::exception& e) {
+    throw WorldError(K::Resource, std::string("urdf: ") + e.what());
+  }
+  const std::string name = sp.name.empty() ? m.name : sp.name;
+  check_new_name(name);
+  if (!namespace_ok(sp.ns)) {
+    throw WorldError(K::NameInvalid, "namespace '" + sp.ns +
+                                         "' is not a ROS namespace (letters, digits, '_' and '/')");
+  }
+  // The namespace the robot's topics take (a robot 1.. without one: its name), '/' around it
+  // left out; robot 0 without a namespace is the node's own.
+  auto bare = [](const std::string& n) {
+    const auto a = n.find_first_not_of('/');
+    return a == std::string::npos ? std::string() : n.substr(a, n.find_last_not_of('/') + 1 - a);
+  };
+  const std::string ns = bare(sp.ns.empty() ? name : sp.ns);
+  for (int k = 0; k < robot_count(); ++k) {
+    const std::string other = bare(robot_namespace(k));
+    if ((k == 0 && !other.empty() && other == ns) ||
+        (k > 0 && (other.empty() ? robot_name(k) : other) == ns)) {
+      throw WorldError(K::NameInUse,
+                       "namespace '" + ns + "' is robot '" + robot_name(k) + "''s already");
+    }
+  }
+  const std::string what = "robot '" + name + "'";
+  check_pose(sp.pose, what);
+  State x(m);
+  x.base = sp.pose;
+  for (int i = 1; i <= m.n; ++i) {
+    x.q[m.idx_q(i)] = std::min(m.upper[i], std::max(m.lower[i], 0.0));
+  }
+  WorldEditPtr e(new WorldEdit);
+  e->generation = world_generation_;
+  e->robot = true;
+  e->spawned = name;
+  e->robot_ns = bare(sp.ns);
+  e->joint_limits = sp.joint_limits;
+  e->robot_initial = std::move(x);
+  e->robot_model = std::make_unique<Model>(std::move(m));
+  return e;
+}
+
+std::string Simulator::spawn_robot(const RobotSpawn& spawn) {
+  WorldEditPtr e = prepare_spawn_robot(spawn);
+  const std::string name = e->spawned;
+  commit(std::move(e));
+  return name;
+}
+
+std::string Simulator::commit_robot(WorldEdit& e) {
+  if (!e.spawned.empty()) {
+    if (!e.robot_model) throw WorldError(WorldError::Kind::Invalid, "the edit was committed");
+    add_robot(e.spawned, e.robot_ns, std::move(*e.robot_model), e.robot_initial, {},
+              e.joint_limits);
+    e.robot_model.reset();
+    ++spawned_;
+  } else {
+    const int k = robot_index(e.deleted);
+    if (k < 1) {
+      throw WorldError(WorldError::Kind::NotFound, "name '" + e.deleted + "': no such robot");
+    }
+    remove_robot(k);
+    ++deleted_;
+  }
+  ++world_generation_;
+  contacts_fresh_ = false;
+  return interpenetration_report();
 }
 
 }  // namespace se3

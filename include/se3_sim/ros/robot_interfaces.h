@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "se3_sim/sim.h"
@@ -39,9 +40,34 @@ class RobotInterfaces {
   void publish(se3::Simulator& sim, const ros::Time& stamp, tf2_ros::TransformBroadcaster& tf);
 
   struct Robot;
+  struct RobotDeleter {
+    void operator()(Robot* r) const;
+  };
+  using RobotPtr = std::unique_ptr<Robot, RobotDeleter>;
+  // A robot spawned or deleted at run time (world_services.h): the slow parts (advertising,
+  // parameters, shutting down) off the node's lock, the swaps under it.
+  /// Off the lock: the interface of a robot about to be spawned, under namespace ns (name when
+  /// ""): NS/robot_description set to urdf, its topics advertised, all its TF frames (fixed
+  /// joints too) on /tf so that they stop with it. Idle until insert(). Throws
+  /// ros::InvalidNameException for a namespace ROS refuses.
+  RobotPtr prepare(const se3::Model& model, const std::string& name, const std::string& ns,
+                   const std::string& urdf);
+  /// Under the lock, after the simulator committed the spawn: it publishes from the next
+  /// publication on.
+  void insert(RobotPtr r, const se3::Simulator& sim);
+  /// Under the lock, after the simulator committed the delete of robot `name`: its interface
+  /// out (idle; nullptr when it has none), the others' indices renewed. discard() it off the
+  /// lock.
+  RobotPtr remove(const std::string& name, const se3::Simulator& sim);
+  /// Off the lock: deletes a removed robot's robot_description and shuts its topics down.
+  void discard(RobotPtr r);
 
  private:
-  std::vector<std::unique_ptr<Robot>> robots_;
+  /// The robot's joint table, TF tree, topics and controllers' subscribers under R.rnh.
+  void connect(Robot& R, const std::vector<std::pair<std::string, double>>& locked,
+               const std::vector<se3::ControllerSpec>& specs);
+  std::vector<RobotPtr> robots_;
+  ros::NodeHandle nh_;
   std::string world_frame_;
   double max_effort_, max_wrench_;
   WithSim with_sim_;

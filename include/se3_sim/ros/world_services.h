@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "se3_sim/ros/robot_interfaces.h"
 #include "se3_sim/sim.h"
 
 namespace se3_ros {
@@ -30,6 +31,9 @@ struct WorldHooks {
   /// Under the lock: the node's reset (time 0) after the simulator's own; its reset of the world
   /// (time runs on) when keep_time.
   std::function<void(bool keep_time)> after_reset;
+  /// The topics and TF of robots 1.. (robot_interfaces.h): a spawned robot's are added, a
+  /// deleted one's removed (nullptr: robots are not spawned).
+  RobotInterfaces* robots = nullptr;
 };
 
 class WorldServices {
