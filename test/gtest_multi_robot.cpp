@@ -242,6 +242,69 @@ TEST(MultiRobot, BadRobotsKeysNameFileLineAndKey) {
             "");
 }
 
+// Two pendulums (the double pendulum with its second joint locked) side by side in one plane,
+// driven towards each other: their links touch
+// (contacts between the two robots' shapes, with an impulse), and each one is held back by the
+// other: both stop short of where each swings alone.
+namespace {
+
+std::string facing(bool a, bool b) {
+  std::string s =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: far, shape: {sphere: 0.01}, pose: {position: [3, 3, 3]}}]\n"
+      "robots:\n";
+  if (a) {
+    s += "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+         " joint_limits: false, locked_joints: {joint2: 0}, base_pose: {position: [0, -0.2, 0]}}\n";
+  }
+  if (b) {
+    s += std::string("  - {name: b, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,") +
+         " joint_limits: false, locked_joints: {joint2: 0}, base_pose: {position: [0, 0.2, 0]}}\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(MultiRobot, RobotsDrivenTogetherTouchWithForcesOnBoth) {
+  auto both = make_simulator(scene_of(facing(true, true)));
+  ASSERT_EQ(both->robot_count(), 2);
+  auto alone_a = make_simulator(scene_of(facing(true, false)));
+  auto alone_b = make_simulator(scene_of(facing(false, true)));
+  for (Simulator* s : {both.get(), alone_a.get(), alone_b.get()}) {
+    const int b = s == alone_b.get() ? 0 : s->robot_count() - 1;
+    if (s != alone_b.get()) s->set_robot_joint_effort(0, 1, -0.2);  // a tilts towards +y
+    if (s != alone_a.get()) s->set_robot_joint_effort(b, 1, 0.2);   // b towards -y
+  }
+  bool touched = false;
+  double impulse = 0;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(both->step()) << both->failure();
+    ASSERT_TRUE(alone_a->step()) << alone_a->failure();
+    ASSERT_TRUE(alone_b->step()) << alone_b->failure();
+    const auto& objs = *both->contact_objects();
+    const ConstraintSystem& cs = *both->constraints();
+    for (int c = 0; c < cs.external_count(); ++c) {
+      const auto& w = cs.external()[c];
+      const int ga = objs[w.a].group, gb = objs[w.b].group;
+      if ((ga == 0 && gb == 2) || (ga == 2 && gb == 0)) {
+        touched = true;
+        impulse = std::max(impulse, w.impulse.norm());
+      }
+    }
+  }
+  EXPECT_TRUE(touched);
+  EXPECT_GT(impulse, 0);
+  const double qa = both->robot_state(0).q[0], qb = both->robot_state(1).q[0];
+  const double qa_alone = alone_a->robot_state(0).q[0], qb_alone = alone_b->robot_state(0).q[0];
+  EXPECT_LT(qa_alone, -1.5);  // alone, each swings well past the other's place
+  EXPECT_GT(qb_alone, 1.5);
+  EXPECT_GT(qa, -1.2) << "a passed through b";
+  EXPECT_LT(qb, 1.2) << "b passed through a";
+  EXPECT_LT(qa, -0.3);  // both did move towards each other
+  EXPECT_GT(qb, 0.3);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -374,6 +374,8 @@ class Simulator {
   /// Robot k's controllers (nullptr without); replaced by set_robot_controllers.
   ControllerSet* robot_controllers(int k);
   void set_robot_controllers(int k, const std::vector<ControllerSpec>& specs);
+  /// The models of robots 1.. (for scene_collision's robots).
+  std::vector<const Model*> extra_robot_models() const;
   /// World pose of every entry of robot k's Model::links, into out.
   void robot_link_poses(int k, std::vector<SE3>& out);
   /// Robot k's world spatial momentum and kinetic energy.
@@ -557,6 +559,7 @@ class Simulator {
     std::unique_ptr<ControllerSet> controllers;
     State initial, state, last_good;
     VecX command, actuation;
+    const VecX* tau = &command;  ///< this step's generalized force (command or actuation)
     Data diag;
     explicit ExtraRobot(const Model& m) : diag(m) {}
   };
@@ -567,7 +570,16 @@ class Simulator {
   /// Rolls robots 1.. back to their last good states.
   void roll_back_extra_robots();
   ExtraRobot& extra(int k) const;
+  /// Whether robots 1.. are in the scene collision (their contacts in robot 0's velocity step).
+  bool coupled_robots() const;
+  /// Coupled: every extra robot's force, free acceleration and state into extra_states_.
+  void prepare_coupled_robots();
+  /// Coupled, after robot 0's step: a robot a contact row touched moves with its new velocity,
+  /// the others take their own step. False (info says why) when one fails.
+  bool finish_coupled_robots(StepInfo& info);
   std::vector<std::unique_ptr<ExtraRobot>> extra_;
+  std::vector<State> extra_states_;  ///< coupled steps: the robots' states (ConstraintStepInput)
+  std::vector<VecX> extra_a_;        ///< and their free accelerations
 
   std::string robot_name_, robot_ns_;
   std::uint64_t world_generation_ = 0, spawned_ = 0, deleted_ = 0;

@@ -53,7 +53,8 @@ GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
 }
 
 SceneCollision scene_collision(const Scene& scene, const Model* model,
-                               const GeometryModel* geometry, const std::string& urdf_xml) {
+                               const GeometryModel* geometry, const std::string& urdf_xml,
+                               const std::vector<const Model*>& robots) {
   std::vector<CollisionObject> objs;
   std::vector<int> scene_object, body;
   CollisionOptions opt;
@@ -180,6 +181,67 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
     body.push_back(-1);
   }
   sc.free_objects = next - robot_bodies;
+  if (robots.size() > scene.extra_robots.size()) {
+    throw SceneError(scene_name(scene) + ": more robots than the scene's robots: list");
+  }
+  for (std::size_t k = 0; k < robots.size(); ++k) {
+    const Model& m = *robots[k];
+    const Scene& e = scene.extra_robots[k];
+    const int first = next;
+    next += m.n + 1;
+    const int group = 2 + static_cast<int>(k);
+    const std::string name = !e.robot_name.empty() ? e.robot_name
+                             : m.name.empty()      ? "robot"
+                                                   : m.name;
+    GeometryOptions gopt;
+    const std::string root = package_root(e.robot_path);
+    if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
+    const GeometryModel g = scene_geometry(e, m, "", gopt);
+    warnings.insert(warnings.end(), g.warnings.begin(), g.warnings.end());
+    for (const GeometryObject& go : g.collisions) {
+      if (go.body < 0 || go.body > m.n) continue;
+      if (go.shape.type == ShapeType::Mesh &&
+          (!go.shape.mesh || go.shape.mesh->triangle_count() == 0)) {
+        throw SceneError(scene_name(scene) + ": robot '" + name + "': " +
+                         (go.warning.empty() ? "link '" + go.link + "': collision mesh '" +
+                                                   go.shape.resource + "' has no triangles"
+                                             : go.warning) +
+                         "; contact needs it");
+      }
+      CollisionObject o;
+      o.name = name + "/" + go.name;
+      o.link = name + "/" + go.link;
+      o.frame = first + go.body;
+      o.placement = go.placement;
+      o.shape = go.shape;
+      o.group = group;
+      o.mu = robot_mu;
+      objs.push_back(o);
+      scene_object.push_back(-1);
+      body.push_back(-1);
+    }
+    for (int i = 1; i <= m.n; ++i) opt.adjacent.push_back({first + m.parent[i], first + i});
+    if (!m.floating) opt.adjacent.push_back({first, CollisionObject::kWorld});
+    if (e.self_collision) opt.self_colliding_groups.push_back(group);
+    if (!e.srdf.empty()) {
+      std::vector<std::pair<std::string, std::string>> pairs;
+      try {
+        pairs = srdf_disabled_pairs(read_text(e.srdf, scene));
+      } catch (const std::invalid_argument& err) {
+        throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "': " + err.what());
+      }
+      for (const auto& p : pairs) {
+        for (const std::string* l : {&p.first, &p.second}) {
+          if (m.link_index(*l) < 0) {
+            throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "' names link '" + *l +
+                             "', which robot '" + name + "' lacks");
+          }
+        }
+        opt.disabled_links.push_back({name + "/" + p.first, name + "/" + p.second});
+      }
+    }
+  }
+  sc.robot_frames = next - robot_bodies - sc.free_objects;
   if (scene.constraints.ground) {
     CollisionObject g;
     g.name = "ground";
