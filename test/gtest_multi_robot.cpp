@@ -305,6 +305,114 @@ TEST(MultiRobot, RobotsDrivenTogetherTouchWithForcesOnBoth) {
   EXPECT_GT(qb, 0.3);
 }
 
+// Robots in a contact scene (a static object far away puts the scene's contact in the collision
+// layer): free-floating double pendulums in zero gravity, the first `idle` of them far away and
+// still, the next two flying into each other along y (their bases and links meet at y = 0).
+namespace {
+
+std::string flying_pair(int idle) {
+  std::string s =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: far, shape: {sphere: 0.01}, pose: {position: [3, 3, 3]}}]\n"
+      "robots:\n";
+  auto robot = [&](const std::string& name, double y, double vy, double w) {
+    s += "  - {name: " + name + ", urdf: data/robots/double_pendulum_simple.urdf, base: free," +
+         (s.find("  - {") == std::string::npos ? "" : " namespace: " + name + ",") +
+         " joint_limits: false, base_pose: {position: [0, " + std::to_string(y) +
+         ", 0]}, base_twist: [0, 0, 0, 0, " + std::to_string(vy) +
+         ", 0], initial_velocities: {joint1: " + std::to_string(w) + "}}\n";
+  };
+  for (int k = 0; k < idle; ++k) robot("idle" + std::to_string(k), -2.0 - k, 0, 0);
+  robot("a", -0.1, 0.5, 1.0);
+  robot("b", 0.1, -0.5, -0.5);
+  return s;
+}
+
+}  // namespace
+
+// Two robots flying into each other touch: contacts between their shapes with an impulse, and
+// what one robot gains the other loses (equal and opposite impulses: each one's momentum
+// changes, the pair's does not), whether the pair is robot 0 and robot 1 or robots 1 and 2.
+TEST(MultiRobot, RobotsFlyingTogetherTouchWithEqualAndOppositeImpulses) {
+  for (int idle = 0; idle < 2; ++idle) {
+    SCOPED_TRACE(idle ? "robots 1 and 2" : "robots 0 and 1");
+    auto sim = make_simulator(scene_of(flying_pair(idle)));
+    ASSERT_EQ(sim->robot_count(), 2 + idle);
+    const int a = idle, b = idle + 1;
+    const Vec6 ha = sim->robot_momentum(a), hb = sim->robot_momentum(b);
+    const double scale = ha.norm() + hb.norm();
+    double impulse = 0;
+    for (int k = 0; k < 600; ++k) {
+      ASSERT_TRUE(sim->step()) << sim->failure();
+      const auto& objs = *sim->contact_objects();
+      const ConstraintSystem& cs = *sim->constraints();
+      for (int c = 0; c < cs.external_count(); ++c) {
+        const auto& w = cs.external()[c];
+        const int ga = objs[w.a].group, gb = objs[w.b].group;
+        // robot 0's shapes are group 0, robot k's group 1 + k (1: the objects)
+        auto robot_of = [](int g) { return g == 0 ? 0 : g >= 2 ? g - 1 : -1; };
+        if (std::min(robot_of(ga), robot_of(gb)) == a && std::max(robot_of(ga), robot_of(gb)) == b)
+          impulse += w.impulse.norm();
+      }
+      // The pair's momentum is kept in every step (no force from outside the pair).
+      ASSERT_LT((sim->robot_momentum(a) + sim->robot_momentum(b) - ha - hb).norm(), 1e-12 * scale)
+          << "step " << k;
+    }
+    EXPECT_GT(impulse, 1e-3);
+    // Each one's momentum changed: equal and opposite.
+    const Vec6 da = sim->robot_momentum(a) - ha, db = sim->robot_momentum(b) - hb;
+    EXPECT_GT(da.tail<3>().norm(), 0.3 * std::abs(ha[4]));
+    EXPECT_LT((da + db).norm(), 1e-12 * scale);
+    // They did not pass through each other: a stays on its side (-y), b on its.
+    EXPECT_LT(sim->robot_state(a).base.p.y(), sim->robot_state(b).base.p.y());
+    EXPECT_LT(sim->robot_momentum(a)[4], 0.5 * ha[4]);  // a's push along +y was (mostly) taken
+    for (int k = 0; k < idle; ++k) {                    // robots that touch nothing are not moved
+      EXPECT_EQ(sim->robot_state(k).v.norm(), 0);
+    }
+  }
+}
+
+// A robot after the first one lies on the ground and on a box (a static object) as the first one
+// does: three free-floating double pendulums (joints locked: a rigid L that rocks on its cube's
+// edge and its tip), dropped from 0.2 m above their supports side by side, robot 0 and robot 1
+// onto the ground, robot 2 onto the box. Each is held up by its support (alone, robots 1 and 2
+// would fall 19 m in 2 s); robot 1 moves as robot 0 does, to rounding.
+TEST(MultiRobot, RobotsAfterTheFirstRestOnTheGroundAndOnABox) {
+  auto robot = [](const std::string& name, const std::string& ns, double x, double z) {
+    return "  - {name: " + name + ", urdf: data/robots/double_pendulum_simple.urdf, base: free," +
+           ns + " locked_joints: {joint1: 1.5708, joint2: 0}, base_pose: {position: [" +
+           std::to_string(x) + ", 0, " + std::to_string(z) + "]}}\n";
+  };
+  const std::string text =
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
+      "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
+      "robots:\n" +
+      robot("a", "", 0, 0.2) + robot("b", " namespace: b,", 1, 0.2) +
+      robot("c", " namespace: c,", 2, 0.4);
+  auto sim = make_simulator(scene_of(text));
+  ASSERT_EQ(sim->robot_count(), 3);
+  // Over the last 1.5 s: each base's lowest and highest centre above its support.
+  double low[3] = {1, 1, 1}, high[3] = {0, 0, 0}, apart = 0;
+  const double support[3] = {0, 0, 0.2};
+  for (int k = 0; k < 2000; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    for (int r = 0; r < 3 && k >= 500; ++r) {
+      const double z = sim->robot_state(r).base.p.z() - support[r];
+      low[r] = std::min(low[r], z);
+      high[r] = std::max(high[r], z);
+    }
+    const SE3 &a = sim->robot_state(0).base, &b = sim->robot_state(1).base;
+    apart = std::max(apart, (b.p - a.p - Vec3(1, 0, 0)).norm() + (b.R - a.R).norm());
+  }
+  for (int r = 0; r < 3; ++r) {
+    SCOPED_TRACE("robot " + std::to_string(r));
+    EXPECT_GT(low[r], 0.02);  // the base cube's centre 2.5 cm above the support when flat on it
+    EXPECT_LT(high[r], 0.1);
+  }
+  EXPECT_LT(apart, 1e-12) << "robot 1 does not move as robot 0 does";
+  EXPECT_LT(sim->penetration_max(), 5e-3);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -29,7 +29,7 @@ struct SceneCollision {
   std::vector<int> scene_object;
   /// Per collision object: the robot body it moves with (its frame), or -1.
   std::vector<int> body;
-  int ground = -1;  ///< index of the ground's collision object, or -1
+  int ground = -1;                    ///< index of the ground's collision object, or -1
   std::vector<std::string> warnings;  ///< meshes that could not be loaded (stand-ins used)
   /// The other robots' frames (after the free objects'): their bodies' count in all.
   int robot_frames = 0;
