@@ -413,6 +413,48 @@ TEST(MultiRobot, RobotsAfterTheFirstRestOnTheGroundAndOnABox) {
   EXPECT_LT(sim->penetration_max(), 5e-3);
 }
 
+// A robot that a contact holds stops at its joint limits as in its own steps: the Panda (robot 1)
+// turns its joint 1 so that its hand presses on a static box, while its joint 4 is driven into
+// its upper limit (-0.0698). The box's contact rows touch it in every step, so the limits are
+// rows of the same velocity step.
+TEST(MultiRobot, ARobotHeldByAContactStopsAtItsJointLimits) {
+  const std::string text =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: wall, shape: {box: [0.1, 0.1, 0.1]}, pose: {position: [0.5, 0.2, 0.65]}}]\n"
+      "robots:\n"
+      "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+      " base_pose: {position: [-2, 0, 0]}}\n"
+      "  - {name: p, namespace: p, urdf: data/robots/panda.urdf, base: fixed,"
+      " locked_joints: {panda_finger_joint1: 0.02, panda_finger_joint2: 0.02},"
+      " initial_positions: {panda_joint2: 0.8, panda_joint4: -0.15}}\n";
+  auto sim = make_simulator(scene_of(text));
+  const Model& m = sim->robot_model(1);
+  const int j1 = m.joint_index("panda_joint1"), j4 = m.joint_index("panda_joint4");
+  ASSERT_GT(j1, 0);
+  ASSERT_GT(j4, 0);
+  sim->set_robot_joint_effort(1, j1, 5.0);
+  sim->set_robot_joint_effort(1, j4, 5.0);
+  double q4 = -10, q4_pressed = -10;  // its largest, and its largest while the hand pressed
+  int pressed = 0;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    const double q = sim->robot_state(1).q[m.idx_q(j4)];
+    q4 = std::max(q4, q);
+    const auto& objs = *sim->contact_objects();
+    const ConstraintSystem& cs = *sim->constraints();
+    bool on_wall = false;
+    for (int c = 0; c < cs.external_count(); ++c) {
+      const auto& w = cs.external()[c];
+      on_wall = on_wall ||
+                ((objs[w.a].name == "wall" || objs[w.b].name == "wall") && w.impulse.norm() > 0);
+    }
+    if (on_wall) ++pressed, q4_pressed = std::max(q4_pressed, q);
+  }
+  EXPECT_GT(pressed, 100);
+  EXPECT_GT(q4_pressed, m.upper[j4] - 0.01);  // joint 4 at its limit while the hand pressed
+  EXPECT_LT(q4, m.upper[j4] + 1e-3) << "joint 4 passed its limit";
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -348,8 +348,9 @@ class Simulator {
   // ---- several robots (src/sim/robots.cpp, docs/multi_robot.md). Robot 0 is the one of
   // model(), state(), set_joint_effort() and the rest above; robots 1.. are added beside it,
   // each with its own state, integrator (the simulator's), commands, controllers and joint
-  // limits, stepped in every step() before robot 0. They do not touch each other or the
-  // objects yet (no contact rows between systems of different robots).
+  // limits. With a scene collision (set_scene_collision after the robots are added) every robot
+  // touches the others, the objects and the ground through robot 0's velocity step
+  // (docs/contact.md, "Several robots in one contact step"); without one each robot steps alone.
   /// Adds a robot; returns its index (robot_count() - 1). Throws std::invalid_argument (nothing
   /// changed) for a name in use or not a frame name, a state that does not fit the model or is
   /// not finite, and ControllerError for a bad controller.

@@ -557,9 +557,12 @@ void Simulator::rebuild_constraints() {
     constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }
   if (scene_collision_) {
+    std::vector<bool> limits;
+    for (const auto& r : extra_)
+      limits.push_back(r->constraints && r->constraints->spec().joint_limits);
     constraints_->set_free_bodies(
         body_models_, 64 + static_cast<int>(16 * (bodies_.size() + extra_.size())),
-        coupled_robots() ? extra_robot_models() : std::vector<const Model*>{});
+        coupled_robots() ? extra_robot_models() : std::vector<const Model*>{}, limits);
   }
   constraints_->anchor(initial_);
   State x = initial_;

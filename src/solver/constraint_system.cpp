@@ -293,7 +293,8 @@ void ConstraintSystem::anchor(const State& x) {
 
 void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
                                        int max_external_contacts,
-                                       const std::vector<const Model*>& robots) {
+                                       const std::vector<const Model*>& robots,
+                                       const std::vector<bool>& robot_limits) {
   free_.clear();
   free_.reserve(bodies.size());
   for (const Model* m : bodies) {
@@ -314,11 +315,18 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   nv_total_ = model_.nv + 6 * static_cast<int>(free_.size());
   art_.clear();
   art_.reserve(robots.size());
-  int art_bodies = 0;
-  for (const Model* m : robots) {
+  int art_bodies = 0, art_limit_rows = 0;
+  for (size_t k = 0; k < robots.size(); ++k) {
+    const Model* m = robots[k];
     if (!m) throw ModelError("a robot beside the system is null");
     art_.emplace_back(*m);
-    art_.back().col0 = nv_total_;
+    ArtSystem& a = art_.back();
+    a.col0 = nv_total_;
+    a.limits = k < robot_limits.size() && robot_limits[k];
+    a.warm_lower.assign(m->n + 1, 0.0);
+    a.warm_upper.assign(m->n + 1, 0.0);
+    a.data.reserve_minv(*m);
+    if (a.limits) art_limit_rows += 2 * m->n;
     nv_total_ += m->nv;
     art_bodies += m->n + 1;
   }
@@ -341,7 +349,7 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   const int nc = static_cast<int>(contacts_.size());
   // Rows: bilateral, limits, the internal contacts, and room for contacts from outside.
   max_rows_ = nb_ + (spec_.joint_limits ? 2 * model_.n : 0) + 3 * nc +
-              3 * std::max(0, max_external_contacts);
+              3 * std::max(0, max_external_contacts) + art_limit_rows;
   rows_.reserve(nv_total_, max_rows_);
   ws_.reserve(max_rows_, nb_);
   Y_ = MatX::Zero(nv_total_, max_rows_);
@@ -368,6 +376,13 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   warm_ext_.assign(std::max(0, max_external_contacts), WarmExternal{});
   warm_ext_next_.assign(warm_ext_.size(), WarmExternal{});
   warm_ext_count_ = 0;
+}
+
+ConstraintSystem::ArtSystem& ConstraintSystem::art_system_of_limit_row(int r) {
+  for (ArtSystem& a : art_) {
+    if (!rows_.J.row(r).segment(a.col0, a.model->nv).isZero(0)) return a;
+  }
+  return art_.back();  // not reached: such a row has its joint's column
 }
 
 void ConstraintSystem::bind() {
@@ -701,7 +716,9 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
   }
   internal_rows_end_ = rows_.count;
   if (in.contacts && in.objects && !in.contacts->empty()) {
-    const int room = (rows_.capacity() - rows_.count) / 3;
+    int art_limit_room = 0;  // kept for the other robots' limits, which come after
+    for (const ArtSystem& a : art_) art_limit_room += a.limits ? 2 * a.model->n : 0;
+    const int room = (rows_.capacity() - rows_.count - art_limit_room) / 3;
     if (static_cast<int>(in.contacts->size()) <= room) {
       add_contact_rows(rows_, *in.contacts, *in.objects, frames_, systems_, vfree_, h, params_);
     } else {  // the deepest first, as many as fit
@@ -711,6 +728,13 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
         add_contact_rows(rows_, one_contact_, *in.objects, frames_, systems_, vfree_, h, params_);
         for (int r = n; r < rows_.count; ++r) rows_.id[r] = k;  // the contact's index
       }
+    }
+  }
+  // The other robots' joint limits (id: the joint; the robot from the row's columns).
+  art_limit_rows_ = rows_.count;
+  for (size_t k = 0; k < art_.size(); ++k) {
+    if (art_[k].limits) {
+      add_joint_limit_rows(rows_, art_[k].kin, (*in.robots)[k].q, vfree_, h, params_);
     }
   }
 }
@@ -938,7 +962,12 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
       case RowType::Equality:  // below
         break;
       case RowType::JointLimit:
-        p_[r] = rows_.J(r, m.idx_v(id)) > 0 ? warm_lower_[id] : warm_upper_[id];
+        if (r < art_limit_rows_) {
+          p_[r] = rows_.J(r, m.idx_v(id)) > 0 ? warm_lower_[id] : warm_upper_[id];
+        } else {
+          const ArtSystem& a = art_system_of_limit_row(r);
+          p_[r] = rows_.J(r, a.col0 + a.model->idx_v(id)) > 0 ? a.warm_lower[id] : a.warm_upper[id];
+        }
         ++n_limits;
         break;
       case RowType::ContactNormal:
@@ -1042,6 +1071,15 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   warm_ext_.swap(warm_ext_next_);
   warm_ext_count_ = next;
   for (int i = 1; i <= m.n; ++i) warm_lower_[i] = warm_upper_[i] = 0;
+  for (ArtSystem& a : art_) {
+    std::fill(a.warm_lower.begin(), a.warm_lower.end(), 0.0);
+    std::fill(a.warm_upper.begin(), a.warm_upper.end(), 0.0);
+  }
+  for (int r = art_limit_rows_; r < rows; ++r) {
+    ArtSystem& a = art_system_of_limit_row(r);
+    const int id = rows_.id[r];
+    (rows_.J(r, a.col0 + a.model->idx_v(id)) > 0 ? a.warm_lower : a.warm_upper)[id] = p_[r];
+  }
   for (Vec3& w : warm_contact_) w.setZero();
   for (int r = nb_; r < internal_rows_end_; ++r) {
     const int id = rows_.id[r];
