@@ -3,9 +3,12 @@
 // untouched by the others, the world interface listing every robot.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
 #include <functional>
 #include <string>
 
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "se3_sim/world.h"
 
@@ -453,6 +456,71 @@ TEST(MultiRobot, ARobotHeldByAContactStopsAtItsJointLimits) {
   EXPECT_GT(pressed, 100);
   EXPECT_GT(q4_pressed, m.upper[j4] - 0.01);  // joint 4 at its limit while the hand pressed
   EXPECT_LT(q4, m.upper[j4] + 1e-3) << "joint 4 passed its limit";
+}
+
+// Every robot's collision follows robot 0's rules: the same URDF as robot 0 and robot 1, its links
+// carrying Gazebo tags (selfCollide on `lower`, mu1/mu2, kp/kd, minDepth, maxVel on `base`), the
+// scene's self_collision off. Robot 1's shapes (links "b/LINK") may collide with each other
+// exactly where robot 0's may (`lower` with `base`, by its tag; never adjacent links), and take
+// the same surface; robot 0's may collide with robot 1's.
+TEST(MultiRobot, EachRobotsCollisionFollowsTheFirstOnesRules) {
+  const std::string urdf = testing::TempDir() + "/multi_robot_tagged.urdf";
+  {
+    std::ofstream out(urdf);
+    out << R"(<robot name="tagged">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="upper"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.4"/></geometry></collision></link>
+  <link name="lower"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.4"/></geometry></collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.05"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="50" velocity="5"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/><origin xyz="0 0 0.4"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="50" velocity="5"/></joint>
+  <gazebo reference="base"><mu1>0.3</mu1><mu2>0.5</mu2><kp>1e6</kp><kd>100</kd>
+    <minDepth>0.001</minDepth><maxVel>0.1</maxVel></gazebo>
+  <gazebo reference="lower"><selfCollide>true</selfCollide></gazebo>
+</robot>)";
+  }
+  const Scene scene = scene_of(
+      "ground: {from_collisions: true}\nintegrator: contact_semi_implicit\nrobots:\n"
+      "  - {name: a, urdf: " +
+      urdf + ", base: fixed}\n  - {name: b, namespace: b, urdf: " + urdf +
+      ", base: fixed, base_pose: {position: [1, 0, 0]}}\n");
+  auto sim = make_simulator(scene);
+  const SceneCollision sc =
+      scene_collision(scene, &sim->model(), nullptr, "", sim->extra_robot_models());
+  const auto& objs = sc.model.objects();
+  auto index = [&](const std::string& link) {
+    for (size_t k = 0; k < objs.size(); ++k) {
+      if (objs[k].link == link) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  const std::vector<std::string> links = {"base", "upper", "lower"};
+  for (const std::string& i : links) {
+    const int a = index(i), b = index("b/" + i);
+    ASSERT_GE(a, 0) << i;
+    ASSERT_GE(b, 0) << i;
+    EXPECT_EQ(objs[b].group, 2);
+    EXPECT_EQ(objs[b].mu, objs[a].mu) << i;
+    EXPECT_EQ(objs[b].mu_own, objs[a].mu_own) << i;
+    EXPECT_EQ(objs[b].self_collide, objs[a].self_collide) << i;
+    auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+    EXPECT_TRUE(same(objs[b].erp, objs[a].erp)) << i;
+    EXPECT_TRUE(same(objs[b].slop, objs[a].slop)) << i;
+    EXPECT_TRUE(same(objs[b].max_correction_velocity, objs[a].max_correction_velocity)) << i;
+    for (const std::string& j : links) {
+      if (i == j) continue;
+      EXPECT_EQ(sc.model.may_collide(b, index("b/" + j)), sc.model.may_collide(a, index(j)))
+          << i << " - " << j;
+      EXPECT_TRUE(sc.model.may_collide(a, index("b/" + j))) << i << " - b/" << j;
+    }
+  }
+  EXPECT_TRUE(sc.model.may_collide(index("b/lower"), index("b/base")));    // its selfCollide
+  EXPECT_FALSE(sc.model.may_collide(index("b/lower"), index("b/upper")));  // adjacent
+  EXPECT_EQ(objs[index("b/base")].mu, 0.3);
 }
 
 int main(int argc, char** argv) {

@@ -42,6 +42,40 @@ std::string package_root(const std::string& file) {
   return "";
 }
 
+// The links' <gazebo> surface tags of a robot (their warnings were given with the model's).
+GazeboTags robot_gazebo_tags(const Scene& robot, const Model& model, const std::string& urdf_xml) {
+  const std::string xml = scene_urdf_text(robot, urdf_xml);
+  if (xml.empty()) return {};
+  std::vector<std::string> links, joints;
+  for (const LinkFrame& lf : model.links) {
+    links.push_back(lf.name);
+    if (!lf.joint.empty()) joints.push_back(lf.joint);
+  }
+  return read_gazebo_tags(xml, links, joints);
+}
+
+// A collision shape of `link` with that link's Gazebo surface: its own mu, self_collide, and its
+// contact stiffness and damping as the pair's correction. dt: the scene's step.
+void gazebo_surface(const GazeboTags& gz, const std::string& link, double dt, CollisionObject& o) {
+  const GazeboLink* gl = gz.link(link);
+  if (!gl) return;
+  if (!std::isnan(gl->mu())) {
+    o.mu = gl->mu();
+    o.mu_own = true;
+  }
+  o.self_collide = gl->self_collide == 1;
+  // Contact stiffness and damping as ODE turns them into its error reduction at the step h:
+  // ERP = h kp / (h kp + kd) (Gazebo's defaults kp 1e12, kd 1 where one is not given).
+  if (!std::isnan(gl->kp) || !std::isnan(gl->kd)) {
+    const double kp = std::isnan(gl->kp) ? 1e12 : gl->kp;
+    const double kd = std::isnan(gl->kd) ? 1.0 : gl->kd;
+    const double hk = dt * kp;
+    if (hk + kd > 0) o.erp = std::clamp(hk / (hk + kd), 0.0, 1.0);
+  }
+  if (gl->min_depth >= 0) o.slop = gl->min_depth;
+  if (gl->max_vel > 0) o.max_correction_velocity = gl->max_vel;
+}
+
 }  // namespace
 
 GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
@@ -73,35 +107,8 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
       geometry = &loaded;
     }
     warnings = geometry->warnings;
-    // The links' <gazebo> surface tags (their warnings were given with the model's).
-    GazeboTags gz;
-    if (const std::string xml = scene_urdf_text(scene, urdf_xml); !xml.empty()) {
-      std::vector<std::string> links, joints;
-      for (const LinkFrame& lf : model->links) {
-        links.push_back(lf.name);
-        if (!lf.joint.empty()) joints.push_back(lf.joint);
-      }
-      gz = read_gazebo_tags(xml, links, joints);
-    }
-    auto surface = [&](CollisionObject& o) {
-      const GazeboLink* gl = gz.link(o.link);
-      if (!gl) return;
-      if (!std::isnan(gl->mu())) {
-        o.mu = gl->mu();
-        o.mu_own = true;
-      }
-      o.self_collide = gl->self_collide == 1;
-      // Contact stiffness and damping as ODE turns them into its error reduction at the step
-      // h: ERP = h kp / (h kp + kd) (Gazebo's defaults kp 1e12, kd 1 where one is not given).
-      if (!std::isnan(gl->kp) || !std::isnan(gl->kd)) {
-        const double kp = std::isnan(gl->kp) ? 1e12 : gl->kp;
-        const double kd = std::isnan(gl->kd) ? 1.0 : gl->kd;
-        const double hk = scene.dt * kp;
-        if (hk + kd > 0) o.erp = std::clamp(hk / (hk + kd), 0.0, 1.0);
-      }
-      if (gl->min_depth >= 0) o.slop = gl->min_depth;
-      if (gl->max_vel > 0) o.max_correction_velocity = gl->max_vel;
-    };
+    const GazeboTags gz = robot_gazebo_tags(scene, *model, urdf_xml);
+    auto surface = [&](CollisionObject& o) { gazebo_surface(gz, o.link, scene.dt, o); };
     for (const GeometryObject& g : geometry->collisions) {
       if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
       if (g.shape.type == ShapeType::Mesh &&
@@ -198,6 +205,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
     if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
     const GeometryModel g = scene_geometry(e, m, "", gopt);
     warnings.insert(warnings.end(), g.warnings.begin(), g.warnings.end());
+    const GazeboTags gz = robot_gazebo_tags(e, m, "");
     for (const GeometryObject& go : g.collisions) {
       if (go.body < 0 || go.body > m.n) continue;
       if (go.shape.type == ShapeType::Mesh &&
@@ -216,6 +224,7 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
       o.shape = go.shape;
       o.group = group;
       o.mu = robot_mu;
+      gazebo_surface(gz, go.link, scene.dt, o);
       objs.push_back(o);
       scene_object.push_back(-1);
       body.push_back(-1);
