@@ -3,9 +3,12 @@
 // untouched by the others, the world interface listing every robot.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
 #include <functional>
 #include <string>
 
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 #include "se3_sim/world.h"
 
@@ -242,6 +245,284 @@ TEST(MultiRobot, BadRobotsKeysNameFileLineAndKey) {
                            "{panda_joint1: 1}}\n"));
             }),
             "");
+}
+
+// Two pendulums (the double pendulum with its second joint locked) side by side in one plane,
+// driven towards each other: their links touch
+// (contacts between the two robots' shapes, with an impulse), and each one is held back by the
+// other: both stop short of where each swings alone.
+namespace {
+
+std::string facing(bool a, bool b) {
+  std::string s =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: far, shape: {sphere: 0.01}, pose: {position: [3, 3, 3]}}]\n"
+      "robots:\n";
+  if (a) {
+    s += "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+         " joint_limits: false, locked_joints: {joint2: 0}, base_pose: {position: [0, -0.2, 0]}}\n";
+  }
+  if (b) {
+    s += std::string("  - {name: b, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,") +
+         " joint_limits: false, locked_joints: {joint2: 0}, base_pose: {position: [0, 0.2, 0]}}\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(MultiRobot, RobotsDrivenTogetherTouchWithForcesOnBoth) {
+  auto both = make_simulator(scene_of(facing(true, true)));
+  ASSERT_EQ(both->robot_count(), 2);
+  auto alone_a = make_simulator(scene_of(facing(true, false)));
+  auto alone_b = make_simulator(scene_of(facing(false, true)));
+  for (Simulator* s : {both.get(), alone_a.get(), alone_b.get()}) {
+    const int b = s == alone_b.get() ? 0 : s->robot_count() - 1;
+    if (s != alone_b.get()) s->set_robot_joint_effort(0, 1, -0.2);  // a tilts towards +y
+    if (s != alone_a.get()) s->set_robot_joint_effort(b, 1, 0.2);   // b towards -y
+  }
+  bool touched = false;
+  double impulse = 0;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(both->step()) << both->failure();
+    ASSERT_TRUE(alone_a->step()) << alone_a->failure();
+    ASSERT_TRUE(alone_b->step()) << alone_b->failure();
+    const auto& objs = *both->contact_objects();
+    const ConstraintSystem& cs = *both->constraints();
+    for (int c = 0; c < cs.external_count(); ++c) {
+      const auto& w = cs.external()[c];
+      const int ga = objs[w.a].group, gb = objs[w.b].group;
+      if ((ga == 0 && gb == 2) || (ga == 2 && gb == 0)) {
+        touched = true;
+        impulse = std::max(impulse, w.impulse.norm());
+      }
+    }
+  }
+  EXPECT_TRUE(touched);
+  EXPECT_GT(impulse, 0);
+  const double qa = both->robot_state(0).q[0], qb = both->robot_state(1).q[0];
+  const double qa_alone = alone_a->robot_state(0).q[0], qb_alone = alone_b->robot_state(0).q[0];
+  EXPECT_LT(qa_alone, -1.5);  // alone, each swings well past the other's place
+  EXPECT_GT(qb_alone, 1.5);
+  EXPECT_GT(qa, -1.2) << "a passed through b";
+  EXPECT_LT(qb, 1.2) << "b passed through a";
+  EXPECT_LT(qa, -0.3);  // both did move towards each other
+  EXPECT_GT(qb, 0.3);
+}
+
+// Robots in a contact scene (a static object far away puts the scene's contact in the collision
+// layer): free-floating double pendulums in zero gravity, the first `idle` of them far away and
+// still, the next two flying into each other along y (their bases and links meet at y = 0).
+namespace {
+
+std::string flying_pair(int idle) {
+  std::string s =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: far, shape: {sphere: 0.01}, pose: {position: [3, 3, 3]}}]\n"
+      "robots:\n";
+  auto robot = [&](const std::string& name, double y, double vy, double w) {
+    s += "  - {name: " + name + ", urdf: data/robots/double_pendulum_simple.urdf, base: free," +
+         (s.find("  - {") == std::string::npos ? "" : " namespace: " + name + ",") +
+         " joint_limits: false, base_pose: {position: [0, " + std::to_string(y) +
+         ", 0]}, base_twist: [0, 0, 0, 0, " + std::to_string(vy) +
+         ", 0], initial_velocities: {joint1: " + std::to_string(w) + "}}\n";
+  };
+  for (int k = 0; k < idle; ++k) robot("idle" + std::to_string(k), -2.0 - k, 0, 0);
+  robot("a", -0.1, 0.5, 1.0);
+  robot("b", 0.1, -0.5, -0.5);
+  return s;
+}
+
+}  // namespace
+
+// Two robots flying into each other touch: contacts between their shapes with an impulse, and
+// what one robot gains the other loses (equal and opposite impulses: each one's momentum
+// changes, the pair's does not), whether the pair is robot 0 and robot 1 or robots 1 and 2.
+TEST(MultiRobot, RobotsFlyingTogetherTouchWithEqualAndOppositeImpulses) {
+  for (int idle = 0; idle < 2; ++idle) {
+    SCOPED_TRACE(idle ? "robots 1 and 2" : "robots 0 and 1");
+    auto sim = make_simulator(scene_of(flying_pair(idle)));
+    ASSERT_EQ(sim->robot_count(), 2 + idle);
+    const int a = idle, b = idle + 1;
+    const Vec6 ha = sim->robot_momentum(a), hb = sim->robot_momentum(b);
+    const double scale = ha.norm() + hb.norm();
+    double impulse = 0;
+    for (int k = 0; k < 600; ++k) {
+      ASSERT_TRUE(sim->step()) << sim->failure();
+      const auto& objs = *sim->contact_objects();
+      const ConstraintSystem& cs = *sim->constraints();
+      for (int c = 0; c < cs.external_count(); ++c) {
+        const auto& w = cs.external()[c];
+        const int ga = objs[w.a].group, gb = objs[w.b].group;
+        // robot 0's shapes are group 0, robot k's group 1 + k (1: the objects)
+        auto robot_of = [](int g) { return g == 0 ? 0 : g >= 2 ? g - 1 : -1; };
+        if (std::min(robot_of(ga), robot_of(gb)) == a && std::max(robot_of(ga), robot_of(gb)) == b)
+          impulse += w.impulse.norm();
+      }
+      // The pair's momentum is kept in every step (no force from outside the pair).
+      ASSERT_LT((sim->robot_momentum(a) + sim->robot_momentum(b) - ha - hb).norm(), 1e-12 * scale)
+          << "step " << k;
+    }
+    EXPECT_GT(impulse, 1e-3);
+    // Each one's momentum changed: equal and opposite.
+    const Vec6 da = sim->robot_momentum(a) - ha, db = sim->robot_momentum(b) - hb;
+    EXPECT_GT(da.tail<3>().norm(), 0.3 * std::abs(ha[4]));
+    EXPECT_LT((da + db).norm(), 1e-12 * scale);
+    // They did not pass through each other: a stays on its side (-y), b on its.
+    EXPECT_LT(sim->robot_state(a).base.p.y(), sim->robot_state(b).base.p.y());
+    EXPECT_LT(sim->robot_momentum(a)[4], 0.5 * ha[4]);  // a's push along +y was (mostly) taken
+    for (int k = 0; k < idle; ++k) {                    // robots that touch nothing are not moved
+      EXPECT_EQ(sim->robot_state(k).v.norm(), 0);
+    }
+  }
+}
+
+// A robot after the first one lies on the ground and on a box (a static object) as the first one
+// does: three free-floating double pendulums (joints locked: a rigid L that rocks on its cube's
+// edge and its tip), dropped from 0.2 m above their supports side by side, robot 0 and robot 1
+// onto the ground, robot 2 onto the box. Each is held up by its support (alone, robots 1 and 2
+// would fall 19 m in 2 s); robot 1 moves as robot 0 does, to rounding.
+TEST(MultiRobot, RobotsAfterTheFirstRestOnTheGroundAndOnABox) {
+  auto robot = [](const std::string& name, const std::string& ns, double x, double z) {
+    return "  - {name: " + name + ", urdf: data/robots/double_pendulum_simple.urdf, base: free," +
+           ns + " locked_joints: {joint1: 1.5708, joint2: 0}, base_pose: {position: [" +
+           std::to_string(x) + ", 0, " + std::to_string(z) + "]}}\n";
+  };
+  const std::string text =
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
+      "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
+      "robots:\n" +
+      robot("a", "", 0, 0.2) + robot("b", " namespace: b,", 1, 0.2) +
+      robot("c", " namespace: c,", 2, 0.4);
+  auto sim = make_simulator(scene_of(text));
+  ASSERT_EQ(sim->robot_count(), 3);
+  // Over the last 1.5 s: each base's lowest and highest centre above its support.
+  double low[3] = {1, 1, 1}, high[3] = {0, 0, 0}, apart = 0;
+  const double support[3] = {0, 0, 0.2};
+  for (int k = 0; k < 2000; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    for (int r = 0; r < 3 && k >= 500; ++r) {
+      const double z = sim->robot_state(r).base.p.z() - support[r];
+      low[r] = std::min(low[r], z);
+      high[r] = std::max(high[r], z);
+    }
+    const SE3 &a = sim->robot_state(0).base, &b = sim->robot_state(1).base;
+    apart = std::max(apart, (b.p - a.p - Vec3(1, 0, 0)).norm() + (b.R - a.R).norm());
+  }
+  for (int r = 0; r < 3; ++r) {
+    SCOPED_TRACE("robot " + std::to_string(r));
+    EXPECT_GT(low[r], 0.02);  // the base cube's centre 2.5 cm above the support when flat on it
+    EXPECT_LT(high[r], 0.1);
+  }
+  EXPECT_LT(apart, 1e-12) << "robot 1 does not move as robot 0 does";
+  EXPECT_LT(sim->penetration_max(), 5e-3);
+}
+
+// A robot that a contact holds stops at its joint limits as in its own steps: the Panda (robot 1)
+// turns its joint 1 so that its hand presses on a static box, while its joint 4 is driven into
+// its upper limit (-0.0698). The box's contact rows touch it in every step, so the limits are
+// rows of the same velocity step.
+TEST(MultiRobot, ARobotHeldByAContactStopsAtItsJointLimits) {
+  const std::string text =
+      "gravity: [0, 0, 0]\nintegrator: contact_semi_implicit\ndt: 0.001\n"
+      "objects: [{name: wall, shape: {box: [0.1, 0.1, 0.1]}, pose: {position: [0.5, 0.2, 0.65]}}]\n"
+      "robots:\n"
+      "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+      " base_pose: {position: [-2, 0, 0]}}\n"
+      "  - {name: p, namespace: p, urdf: data/robots/panda.urdf, base: fixed,"
+      " locked_joints: {panda_finger_joint1: 0.02, panda_finger_joint2: 0.02},"
+      " initial_positions: {panda_joint2: 0.8, panda_joint4: -0.15}}\n";
+  auto sim = make_simulator(scene_of(text));
+  const Model& m = sim->robot_model(1);
+  const int j1 = m.joint_index("panda_joint1"), j4 = m.joint_index("panda_joint4");
+  ASSERT_GT(j1, 0);
+  ASSERT_GT(j4, 0);
+  sim->set_robot_joint_effort(1, j1, 5.0);
+  sim->set_robot_joint_effort(1, j4, 5.0);
+  double q4 = -10, q4_pressed = -10;  // its largest, and its largest while the hand pressed
+  int pressed = 0;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    const double q = sim->robot_state(1).q[m.idx_q(j4)];
+    q4 = std::max(q4, q);
+    const auto& objs = *sim->contact_objects();
+    const ConstraintSystem& cs = *sim->constraints();
+    bool on_wall = false;
+    for (int c = 0; c < cs.external_count(); ++c) {
+      const auto& w = cs.external()[c];
+      on_wall = on_wall ||
+                ((objs[w.a].name == "wall" || objs[w.b].name == "wall") && w.impulse.norm() > 0);
+    }
+    if (on_wall) ++pressed, q4_pressed = std::max(q4_pressed, q);
+  }
+  EXPECT_GT(pressed, 100);
+  EXPECT_GT(q4_pressed, m.upper[j4] - 0.01);  // joint 4 at its limit while the hand pressed
+  EXPECT_LT(q4, m.upper[j4] + 1e-3) << "joint 4 passed its limit";
+}
+
+// Every robot's collision follows robot 0's rules: the same URDF as robot 0 and robot 1, its links
+// carrying Gazebo tags (selfCollide on `lower`, mu1/mu2, kp/kd, minDepth, maxVel on `base`), the
+// scene's self_collision off. Robot 1's shapes (links "b/LINK") may collide with each other
+// exactly where robot 0's may (`lower` with `base`, by its tag; never adjacent links), and take
+// the same surface; robot 0's may collide with robot 1's.
+TEST(MultiRobot, EachRobotsCollisionFollowsTheFirstOnesRules) {
+  const std::string urdf = testing::TempDir() + "/multi_robot_tagged.urdf";
+  {
+    std::ofstream out(urdf);
+    out << R"(<robot name="tagged">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="upper"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.4"/></geometry></collision></link>
+  <link name="lower"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.4"/></geometry></collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.05"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="50" velocity="5"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/><origin xyz="0 0 0.4"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="50" velocity="5"/></joint>
+  <gazebo reference="base"><mu1>0.3</mu1><mu2>0.5</mu2><kp>1e6</kp><kd>100</kd>
+    <minDepth>0.001</minDepth><maxVel>0.1</maxVel></gazebo>
+  <gazebo reference="lower"><selfCollide>true</selfCollide></gazebo>
+</robot>)";
+  }
+  const Scene scene = scene_of(
+      "ground: {from_collisions: true}\nintegrator: contact_semi_implicit\nrobots:\n"
+      "  - {name: a, urdf: " +
+      urdf + ", base: fixed}\n  - {name: b, namespace: b, urdf: " + urdf +
+      ", base: fixed, base_pose: {position: [1, 0, 0]}}\n");
+  auto sim = make_simulator(scene);
+  const SceneCollision sc =
+      scene_collision(scene, &sim->model(), nullptr, "", sim->extra_robot_models());
+  const auto& objs = sc.model.objects();
+  auto index = [&](const std::string& link) {
+    for (size_t k = 0; k < objs.size(); ++k) {
+      if (objs[k].link == link) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  const std::vector<std::string> links = {"base", "upper", "lower"};
+  for (const std::string& i : links) {
+    const int a = index(i), b = index("b/" + i);
+    ASSERT_GE(a, 0) << i;
+    ASSERT_GE(b, 0) << i;
+    EXPECT_EQ(objs[b].group, 2);
+    EXPECT_EQ(objs[b].mu, objs[a].mu) << i;
+    EXPECT_EQ(objs[b].mu_own, objs[a].mu_own) << i;
+    EXPECT_EQ(objs[b].self_collide, objs[a].self_collide) << i;
+    auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+    EXPECT_TRUE(same(objs[b].erp, objs[a].erp)) << i;
+    EXPECT_TRUE(same(objs[b].slop, objs[a].slop)) << i;
+    EXPECT_TRUE(same(objs[b].max_correction_velocity, objs[a].max_correction_velocity)) << i;
+    for (const std::string& j : links) {
+      if (i == j) continue;
+      EXPECT_EQ(sc.model.may_collide(b, index("b/" + j)), sc.model.may_collide(a, index(j)))
+          << i << " - " << j;
+      EXPECT_TRUE(sc.model.may_collide(a, index("b/" + j))) << i << " - b/" << j;
+    }
+  }
+  EXPECT_TRUE(sc.model.may_collide(index("b/lower"), index("b/base")));    // its selfCollide
+  EXPECT_FALSE(sc.model.may_collide(index("b/lower"), index("b/upper")));  // adjacent
+  EXPECT_EQ(objs[index("b/base")].mu, 0.3);
 }
 
 int main(int argc, char** argv) {

@@ -36,8 +36,10 @@ struct CollisionObject {
   SE3 placement;           ///< shape frame in the frame
   Shape shape;             ///< Box, Sphere, Cylinder, Capsule, Mesh (see CollisionOptions::mesh)
   bool halfspace = false;  ///< the ground: the solid z <= 0 of the shape frame (shape ignored)
-  int group = 0;           ///< 0: the robot (self-collision rules apply), 1: scene objects
-  double mu = 0.8;         ///< Coulomb friction; a pair uses the larger of its two (as MuJoCo)
+  /// 0: the robot (self-collision rules apply), 1: scene objects, 2 + k: another robot k (its
+  /// own self-collision rule: CollisionOptions::self_colliding_groups)
+  int group = 0;
+  double mu = 0.8;  ///< Coulomb friction; a pair uses the larger of its two (as MuJoCo)
   double restitution = 0;
   /// mu is the link's own (a URDF's Gazebo mu1/mu2): a pair with such an object uses its mu
   /// (the smaller of two), as Gazebo's ground (mu 100) leaves a link's own coefficient to count.
@@ -71,6 +73,8 @@ struct CollisionOptions {
   std::vector<std::pair<std::string, std::string>> disabled_links;
   /// Frames joined by a joint (parent, child); their objects never collide.
   std::vector<FramePair> adjacent;
+  /// Groups >= 2 (other robots) whose objects collide with each other (their self_collision).
+  std::vector<int> self_colliding_groups;
 };
 
 /// A contact between objects a and b (indices into CollisionModel::objects()).

@@ -194,7 +194,8 @@ void add_point_rows(ConstraintRows& rows, const SystemKinematics& sa, int body_a
 void add_axis_rows(ConstraintRows& rows, const SystemKinematics& s, int body, const Vec3& u,
                    const Vec3& e1, const Vec3& e2, double h, const RowParams& p, int id);
 /// The position limits of every limited joint of sys within reach (margin + |v*| h): a row per
-/// side, id the joint index. q the joint positions, vfree the system's free velocity.
+/// side, id the joint index. q the system's joint positions, vfree the stacked free velocity
+/// (the system's part from its col0).
 void add_joint_limit_rows(ConstraintRows& rows, const SystemKinematics& s, const VecX& q,
                           const VecX& vfree, double h, const RowParams& p);
 

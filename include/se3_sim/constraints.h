@@ -180,6 +180,9 @@ struct ConstraintReport {
 struct ConstraintStepInput {
   std::vector<State>* bodies = nullptr;
   const std::vector<VecX>* body_a_free = nullptr;
+  /// The other robots' states and free accelerations (set_free_bodies' robots), in their order.
+  std::vector<State>* robots = nullptr;
+  const std::vector<VecX>* robot_a_free = nullptr;
   const std::vector<Contact>* contacts = nullptr;
   const std::vector<CollisionObject>* objects = nullptr;
 };
@@ -222,7 +225,18 @@ class ConstraintSystem final : public AccelerationHook {
   /// contacts from outside: frames 0..n the robot's bodies, n + 1 + j free body j.
   /// max_external_contacts: room for contacts from outside (StepInput::contacts; the deepest
   /// first when there are more).
-  void set_free_bodies(const std::vector<const Model*>& bodies, int max_external_contacts = 0);
+  /// robots: other robots beside this system's (articulated models, not owned), touching the
+  /// rest only through contacts from outside: their columns follow the free bodies' and their
+  /// frames too (frame n + 1 + B + o_k + i for body i of robot k, o_k the bodies of the robots
+  /// before it); D^-1 stays block-diagonal, each robot's block its own minv. robot_limits[k]:
+  /// robot k's joint limits are rows of the velocity step too (as this system's own are), so a
+  /// robot that a contact pushes stops at its limits (missing entries: no limits).
+  void set_free_bodies(const std::vector<const Model*>& bodies, int max_external_contacts = 0,
+                       const std::vector<const Model*>& robots = {},
+                       const std::vector<bool>& robot_limits = {});
+  /// Whether a row of the last velocity step (or reach test) touched robot k of
+  /// set_free_bodies' robots (false when none did, or after a step without a velocity solve).
+  bool robot_touched(int k) const { return art_[k].touched; }
   using StepInput = ConstraintStepInput;
   /// Whether a velocity step of h from x would have any unilateral row (a limit or contact
   /// within reach), from the free acceleration a_free and the given extra input.
@@ -277,6 +291,17 @@ class ConstraintSystem final : public AccelerationHook {
     int row0 = 0;
     /// joint_coupling: a.body the joint, b.body its leader, q_a = mult q_b + off (one row)
     double mult = 1, off = 0;
+  };
+  /// Another robot (set_free_bodies' robots): its kinematics and D^-1 block from its own Data.
+  struct ArtSystem {
+    explicit ArtSystem(const Model& m) : model(&m), data(m) {}
+    const Model* model;
+    Data data;
+    SystemKinematics kin;
+    int col0 = 0;
+    bool touched = false;
+    bool limits = false;                         ///< its joint limits are rows
+    std::vector<double> warm_lower, warm_upper;  ///< last step's limit impulses, by joint
   };
   struct FreeBody {
     const Model* model = nullptr;
@@ -344,7 +369,12 @@ class ConstraintSystem final : public AccelerationHook {
   std::vector<Vec6> Vb_;  ///< body twists (body frame)
   std::vector<Vec6> Ab_;  ///< velocity-product accelerations (body frame, wdot = 0)
   std::vector<FreeBody> free_;
-  std::vector<const SystemKinematics*> systems_;  ///< robot, then the free bodies
+  std::vector<ArtSystem> art_;  ///< the other robots
+  /// The robot of a joint-limit row at or after art_limit_rows_ (the one whose columns it has).
+  ArtSystem& art_system_of_limit_row(int r);
+  std::vector<State>* art_states_ = nullptr;  ///< their states in this velocity step
+  int art_limit_rows_ = 0;  ///< the first of their joint-limit rows (after every contact row)
+  std::vector<const SystemKinematics*> systems_;  ///< robot, then the free bodies, then art_
   std::vector<FrameRef> frames_;                  ///< collision frame -> (system, body)
 
   // internal contacts: sphere k against the ground, as collision-layer contacts

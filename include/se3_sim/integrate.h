@@ -293,6 +293,14 @@ void free_body_acceleration(const Model& body, const State& x, VecX& a);
 /// in flight the world momentum stays exactly what it was.
 void advance_free_body(const Model& body, State& x, double h);
 
+/// The contact scheme's free acceleration at x (ABA with the passive forces and without the
+/// hook, the free base's part by FreeBaseStep): what a velocity-level step of another robot
+/// starts from (ContactBodies::robot_a_free). Valid until the stepper's next call.
+const VecX& contact_free_acceleration(Stepper& stepper, const State& x, const VecX& tau_cmd);
+/// After a velocity-level step set x.v: the positions and the base twist (FreeBaseStep::advance
+/// on the stepper's workspace of the last contact_free_acceleration at x).
+void advance_velocity_level(Stepper& stepper, State& x, double h);
+
 /// The free bodies of a contact step beside the robot (scene objects) and contacts from
 /// outside; any pointer may be null (no bodies, no outside contacts).
 struct ContactBodies {
@@ -301,6 +309,10 @@ struct ContactBodies {
   const std::vector<VecX>* a_free = nullptr;  ///< free_body_acceleration of each, this step
   const std::vector<Contact>* contacts = nullptr;
   const std::vector<CollisionObject>* objects = nullptr;
+  /// Other robots in the contact (ConstraintSystem::set_free_bodies' robots): their states, whose
+  /// v a velocity-level step sets (their positions are the caller's), and free accelerations.
+  std::vector<State>* robot_states = nullptr;
+  const std::vector<VecX>* robot_a_free = nullptr;
 };
 
 /// One step of h under the constraints (constraints.h). With only bilateral constraints (and no

@@ -5,6 +5,8 @@
 // Frames (the numbering collide() takes poses in, shared with the multi-body step):
 //   0..n         the robot's bodies (frame k = body k; poses Data::oMb after forward kinematics)
 //   n+1+j        the j-th free object of Scene::objects (static ones are skipped in the count)
+//   n+1+B+o_k+i  body i of the scene's robot k >= 1 (Scene::extra_robots; B free objects,
+//                o_k the bodies of the robots before it)
 //   kWorld (-1)  static objects and the ground
 // Without a robot n = -1: frames start at 0 with the first free object.
 #pragma once
@@ -29,6 +31,8 @@ struct SceneCollision {
   std::vector<int> body;
   int ground = -1;                    ///< index of the ground's collision object, or -1
   std::vector<std::string> warnings;  ///< meshes that could not be loaded (stand-ins used)
+  /// The other robots' frames (after the free objects'): their bodies' count in all.
+  int robot_frames = 0;
 };
 
 /// The robot's geometry as scene_collision reads it (urdf_xml as scene_geometry; meshes also
@@ -44,9 +48,13 @@ GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
 /// restitution. A fixed base never collides with the world's static geometry. Throws
 /// SceneError (one line naming the scene) for an SRDF that names a link the robot lacks, a
 /// `contacts:` link it lacks, or a mesh without a hull.
+/// robots: the models of Scene::extra_robots (Simulator::extra_robot_models): their collision
+/// shapes in group 2 + k, link names "NAME/LINK" (their SRDF pairs too), each robot's
+/// self_collision its own; a robot's links collide with every other robot's and the objects.
 SceneCollision scene_collision(const Scene& scene, const Model* model,
                                const GeometryModel* geometry = nullptr,
-                               const std::string& urdf_xml = "");
+                               const std::string& urdf_xml = "",
+                               const std::vector<const Model*>& robots = {});
 
 /// frames = body_poses (Data::oMb, or empty without a robot) followed by the free objects'
 /// poses (their centres in the world, in Scene::objects order). Allocation-free once frames

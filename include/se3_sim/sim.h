@@ -348,8 +348,9 @@ class Simulator {
   // ---- several robots (src/sim/robots.cpp, docs/multi_robot.md). Robot 0 is the one of
   // model(), state(), set_joint_effort() and the rest above; robots 1.. are added beside it,
   // each with its own state, integrator (the simulator's), commands, controllers and joint
-  // limits, stepped in every step() before robot 0. They do not touch each other or the
-  // objects yet (no contact rows between systems of different robots).
+  // limits. With a scene collision (set_scene_collision after the robots are added) every robot
+  // touches the others, the objects and the ground through robot 0's velocity step
+  // (docs/contact.md, "Several robots in one contact step"); without one each robot steps alone.
   /// Adds a robot; returns its index (robot_count() - 1). Throws std::invalid_argument (nothing
   /// changed) for a name in use or not a frame name, a state that does not fit the model or is
   /// not finite, and ControllerError for a bad controller.
@@ -374,6 +375,8 @@ class Simulator {
   /// Robot k's controllers (nullptr without); replaced by set_robot_controllers.
   ControllerSet* robot_controllers(int k);
   void set_robot_controllers(int k, const std::vector<ControllerSpec>& specs);
+  /// The models of robots 1.. (for scene_collision's robots).
+  std::vector<const Model*> extra_robot_models() const;
   /// World pose of every entry of robot k's Model::links, into out.
   void robot_link_poses(int k, std::vector<SE3>& out);
   /// Robot k's world spatial momentum and kinetic energy.
@@ -567,6 +570,7 @@ class Simulator {
     std::unique_ptr<ControllerSet> controllers;
     State initial, state, last_good;
     VecX command, actuation;
+    const VecX* tau = &command;  ///< this step's generalized force (command or actuation)
     Data diag;
     explicit ExtraRobot(const Model& m) : diag(m) {}
   };
@@ -583,7 +587,16 @@ class Simulator {
   /// Rolls robots 1.. back to their last good states.
   void roll_back_extra_robots();
   ExtraRobot& extra(int k) const;
+  /// Whether robots 1.. are in the scene collision (their contacts in robot 0's velocity step).
+  bool coupled_robots() const;
+  /// Coupled: every extra robot's force, free acceleration and state into extra_states_.
+  void prepare_coupled_robots();
+  /// Coupled, after robot 0's step: a robot a contact row touched moves with its new velocity,
+  /// the others take their own step. False (info says why) when one fails.
+  bool finish_coupled_robots(StepInfo& info);
   std::vector<std::unique_ptr<ExtraRobot>> extra_;
+  std::vector<State> extra_states_;  ///< coupled steps: the robots' states (ConstraintStepInput)
+  std::vector<VecX> extra_a_;        ///< and their free accelerations
 
   std::string robot_name_, robot_ns_;
   std::uint64_t world_generation_ = 0, spawned_ = 0, deleted_ = 0;

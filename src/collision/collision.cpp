@@ -920,6 +920,11 @@ CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOp
       ok = ok && !adjacent.count({a.frame, b.frame});
       ok = ok && !(a.group == 0 && b.group == 0 && !options_.self_collision && !a.self_collide &&
                    !b.self_collide);
+      // Another robot's links against each other: its own self-collision rule.
+      ok = ok &&
+           !(a.group >= 2 && a.group == b.group && !a.self_collide && !b.self_collide &&
+             std::find(options_.self_colliding_groups.begin(), options_.self_colliding_groups.end(),
+                       a.group) == options_.self_colliding_groups.end());
       ok = ok && !(!a.link.empty() && !b.link.empty() && disabled.count({a.link, b.link}));
       m.allowed[std::size_t(i) * n + j] = ok;
     }

@@ -594,7 +594,7 @@ void add_joint_limit_rows(ConstraintRows& rows, const SystemKinematics& s, const
   for (int i = 1; i <= m.n; ++i) {
     const int col = m.idx_v(i);
     const double qi = q[m.idx_q(i)];
-    const double reach = p.margin + std::abs(vfree[col]) * h;
+    const double reach = p.margin + std::abs(vfree[s.col0 + col]) * h;
     for (int side = 0; side < 2; ++side) {
       const double limit = side == 0 ? m.lower[i] : m.upper[i];
       if (!std::isfinite(limit)) continue;
@@ -604,7 +604,7 @@ void add_joint_limit_rows(ConstraintRows& rows, const SystemKinematics& s, const
       rows.J(r, s.col0 + col) = side == 0 ? 1.0 : -1.0;
       double ref = gap_reference(g, h, p);
       if (p.limit_restitution > 0) {  // an impact within this step bounces, as contacts do
-        const double vn = side == 0 ? vfree[col] : -vfree[col];
+        const double vn = side == 0 ? vfree[s.col0 + col] : -vfree[s.col0 + col];
         if (vn < -p.restitution_velocity && g + h * vn <= p.slop) {
           ref = std::max(ref, -p.limit_restitution * vn);
         }

@@ -336,12 +336,21 @@ LimitEventWorkspace& Stepper::limit_events() {
   return *limit_events_;
 }
 
+const VecX& contact_free_acceleration(Stepper& stepper, const State& x, const VecX& tau_cmd) {
+  return free_acceleration(stepper, x, tau_cmd);
+}
+
+void advance_velocity_level(Stepper& stepper, State& x, double h) {
+  stepper.free_base().advance(stepper.data(), x, h);
+}
+
 StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State& x,
                           const VecX& tau_cmd, double h, const ContactBodies& bodies) {
   AccelerationHook* const previous = stepper.acceleration_hook();
   const size_t nbody = bodies.states ? bodies.states->size() : 0;
-  const bool velocity_level =
-      constraints.has_unilateral() || nbody > 0 || (bodies.contacts && !bodies.contacts->empty());
+  const size_t nrobot = bodies.robot_states ? bodies.robot_states->size() : 0;
+  const bool velocity_level = constraints.has_unilateral() || nbody > 0 || nrobot > 0 ||
+                              (bodies.contacts && !bodies.contacts->empty());
   if (!velocity_level) {  // bilateral only: the integrator with eq. (32) in every stage
     stepper.set_acceleration_hook(&constraints);
     const StepInfo info = stepper.step(x, tau_cmd, h);
@@ -354,10 +363,12 @@ StepInfo constrained_step(ConstraintSystem& constraints, Stepper& stepper, State
   in.body_a_free = bodies.a_free;
   in.contacts = bodies.contacts;
   in.objects = bodies.objects;
+  in.robots = bodies.robot_states;
+  in.robot_a_free = bodies.robot_a_free;
   // Joint limits alone (no ground, contact, objects or bilateral rows) under another
   // integrator: its own steps with the impacts located (limit_event_step).
   const ConstraintSpec& spec = constraints.spec();
-  if (!stepper.contact_scheme() && spec.joint_limits && !spec.ground && nbody == 0 &&
+  if (!stepper.contact_scheme() && spec.joint_limits && !spec.ground && nbody == 0 && nrobot == 0 &&
       !bodies.objects && !bodies.contacts && constraints.bilateral_rows() == 0) {
     LimitEventOptions o;
     o.restitution = spec.options.limit_restitution;

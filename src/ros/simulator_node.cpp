@@ -480,8 +480,9 @@ void SimulatorNodeImpl::set_initial_positions(
       if (se3::uses_scene_collision(scene_)) {
         const se3::GeometryModel none;
         const bool robot = !(urdf_xml_.empty() && scene_.robot_path.empty());
-        sim_->set_scene_collision(
-            se3::scene_collision(scene_, &sim_->model(), robot ? nullptr : &none, urdf_xml_));
+        sim_->set_scene_collision(se3::scene_collision(scene_, &sim_->model(),
+                                                       robot ? nullptr : &none, urdf_xml_,
+                                                       sim_->extra_robot_models()));
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "se3_sim/format.h"
+#include "se3_sim/scene_collision.h"
 #include "se3_sim/sim.h"
 
 namespace se3 {
@@ -55,6 +56,10 @@ int Simulator::add_robot(const std::string& name, const std::string& ns, Model m
   if (robot_index(name) >= 0 || object_index(name) >= 0) {
     throw std::invalid_argument("robot name '" + name + "' is already a model's");
   }
+  if (scene_collision_) {
+    throw std::invalid_argument("robot '" + name +
+                                "': add robots before set_scene_collision (it holds their shapes)");
+  }
   const std::string what = "robot '" + name + "'";
   auto r = std::make_unique<ExtraRobot>(model);
   r->name = name;
@@ -75,6 +80,8 @@ int Simulator::add_robot(const std::string& name, const std::string& ns, Model m
   r->command = VecX::Zero(m.nv);
   r->actuation = VecX::Zero(m.nv);
   if (!controllers.empty()) r->controllers = std::make_unique<ControllerSet>(m, controllers);
+  extra_states_.push_back(r->initial);
+  extra_a_.push_back(VecX::Zero(m.nv));
   extra_.push_back(std::move(r));
   reset_extra_robot(*extra_.back());  // the others run on (a robot spawned at run time)
   return robot_count() - 1;
@@ -175,6 +182,56 @@ double Simulator::robot_kinetic_energy(int k) {
   if (k == 0) return kinetic_energy();
   ExtraRobot& r = extra(k);
   return se3::kinetic_energy(*r.model, r.diag, r.state.base, r.state.q, r.state.v);
+}
+
+std::vector<const Model*> Simulator::extra_robot_models() const {
+  std::vector<const Model*> out;
+  for (const auto& r : extra_) out.push_back(r->model.get());
+  return out;
+}
+
+bool Simulator::coupled_robots() const {
+  return scene_collision_ && scene_collision_->robot_frames > 0;
+}
+
+void Simulator::prepare_coupled_robots() {
+  for (size_t k = 0; k < extra_.size(); ++k) {
+    ExtraRobot& r = *extra_[k];
+    r.tau = &r.command;
+    if (r.controllers) {
+      r.actuation = r.command;
+      r.controllers->update(r.state, time_, config_.dt, r.actuation);
+      r.tau = &r.actuation;
+    }
+    State& s = extra_states_[k];
+    s.base = r.state.base;
+    s.q = r.state.q;
+    s.v = r.state.v;
+    extra_a_[k] = contact_free_acceleration(*r.stepper, r.state, *r.tau);
+  }
+}
+
+bool Simulator::finish_coupled_robots(StepInfo& info) {
+  const double h = config_.dt;
+  for (size_t k = 0; k < extra_.size(); ++k) {
+    ExtraRobot& r = *extra_[k];
+    StepInfo own;
+    if (constraints_->robot_touched(static_cast<int>(k))) {
+      r.state.v = extra_states_[k].v;
+      advance_velocity_level(*r.stepper, r.state, h);
+    } else {
+      own = r.constraints ? constrained_step(*r.constraints, *r.stepper, r.state, *r.tau, h)
+                          : r.stepper->step(r.state, *r.tau, h);
+    }
+    if (own.ok && robot_ok(*r.model, r.state, config_.guard.max_rate)) continue;
+    info.ok = false;
+    info.reason = "robot '" + r.name + "': " +
+                  (own.ok ? "a rate exceeds the limit " + num(config_.guard.max_rate) +
+                                " or the state is not finite"
+                          : own.reason);
+    return false;
+  }
+  return true;
 }
 
 bool Simulator::step_extra_robots() {

@@ -35,6 +35,40 @@ std::string package_root_of_file(const std::string& file) {
   return package_root(slash == 0 ? "/" : file.substr(0, slash));
 }
 
+// The links' <gazebo> surface tags of a robot (their warnings were given with the model's).
+GazeboTags robot_gazebo_tags(const Scene& robot, const Model& model, const std::string& urdf_xml) {
+  const std::string xml = scene_urdf_text(robot, urdf_xml);
+  if (xml.empty()) return {};
+  std::vector<std::string> links, joints;
+  for (const LinkFrame& lf : model.links) {
+    links.push_back(lf.name);
+    if (!lf.joint.empty()) joints.push_back(lf.joint);
+  }
+  return read_gazebo_tags(xml, links, joints);
+}
+
+// A collision shape of `link` with that link's Gazebo surface: its own mu, self_collide, and its
+// contact stiffness and damping as the pair's correction. dt: the scene's step.
+void gazebo_surface(const GazeboTags& gz, const std::string& link, double dt, CollisionObject& o) {
+  const GazeboLink* gl = gz.link(link);
+  if (!gl) return;
+  if (!std::isnan(gl->mu())) {
+    o.mu = gl->mu();
+    o.mu_own = true;
+  }
+  o.self_collide = gl->self_collide == 1;
+  // Contact stiffness and damping as ODE turns them into its error reduction at the step h:
+  // ERP = h kp / (h kp + kd) (Gazebo's defaults kp 1e12, kd 1 where one is not given).
+  if (!std::isnan(gl->kp) || !std::isnan(gl->kd)) {
+    const double kp = std::isnan(gl->kp) ? 1e12 : gl->kp;
+    const double kd = std::isnan(gl->kd) ? 1.0 : gl->kd;
+    const double hk = dt * kp;
+    if (hk + kd > 0) o.erp = std::clamp(hk / (hk + kd), 0.0, 1.0);
+  }
+  if (gl->min_depth >= 0) o.slop = gl->min_depth;
+  if (gl->max_vel > 0) o.max_correction_velocity = gl->max_vel;
+}
+
 }  // namespace
 
 GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
@@ -47,7 +81,8 @@ GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
 }
 
 SceneCollision scene_collision(const Scene& scene, const Model* model,
-                               const GeometryModel* geometry, const std::string& urdf_xml) {
+                               const GeometryModel* geometry, const std::string& urdf_xml,
+                               const std::vector<const Model*>& robots) {
   std::vector<CollisionObject> objs;
   std::vector<int> scene_object, body;
   CollisionOptions opt;
@@ -66,35 +101,8 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
       geometry = &loaded;
     }
     warnings = geometry->warnings;
-    // The links' <gazebo> surface tags (their warnings were given with the model's).
-    GazeboTags gz;
-    if (const std::string xml = scene_urdf_text(scene, urdf_xml); !xml.empty()) {
-      std::vector<std::string> links, joints;
-      for (const LinkFrame& lf : model->links) {
-        links.push_back(lf.name);
-        if (!lf.joint.empty()) joints.push_back(lf.joint);
-      }
-      gz = read_gazebo_tags(xml, links, joints);
-    }
-    auto surface = [&](CollisionObject& o) {
-      const GazeboLink* gl = gz.link(o.link);
-      if (!gl) return;
-      if (!std::isnan(gl->mu())) {
-        o.mu = gl->mu();
-        o.mu_own = true;
-      }
-      o.self_collide = gl->self_collide == 1;
-      // Contact stiffness and damping as ODE turns them into its error reduction at the step
-      // h: ERP = h kp / (h kp + kd) (Gazebo's defaults kp 1e12, kd 1 where one is not given).
-      if (!std::isnan(gl->kp) || !std::isnan(gl->kd)) {
-        const double kp = std::isnan(gl->kp) ? 1e12 : gl->kp;
-        const double kd = std::isnan(gl->kd) ? 1.0 : gl->kd;
-        const double hk = scene.dt * kp;
-        if (hk + kd > 0) o.erp = std::clamp(hk / (hk + kd), 0.0, 1.0);
-      }
-      if (gl->min_depth >= 0) o.slop = gl->min_depth;
-      if (gl->max_vel > 0) o.max_correction_velocity = gl->max_vel;
-    };
+    const GazeboTags gz = robot_gazebo_tags(scene, *model, urdf_xml);
+    auto surface = [&](CollisionObject& o) { gazebo_surface(gz, o.link, scene.dt, o); };
     for (const GeometryObject& g : geometry->collisions) {
       if (g.body < 0 || g.body > model->n) continue;  // world geometry of a URDF: not the robot's
       if (g.shape.type == ShapeType::Mesh &&
@@ -174,6 +182,69 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
     body.push_back(-1);
   }
   sc.free_objects = next - robot_bodies;
+  if (robots.size() > scene.extra_robots.size()) {
+    throw SceneError(scene_name(scene) + ": more robots than the scene's robots: list");
+  }
+  for (std::size_t k = 0; k < robots.size(); ++k) {
+    const Model& m = *robots[k];
+    const Scene& e = scene.extra_robots[k];
+    const int first = next;
+    next += m.n + 1;
+    const int group = 2 + static_cast<int>(k);
+    const std::string name = !e.robot_name.empty() ? e.robot_name
+                             : m.name.empty()      ? "robot"
+                                                   : m.name;
+    GeometryOptions gopt;
+    const std::string root = package_root(e.robot_path);
+    if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
+    const GeometryModel g = scene_geometry(e, m, "", gopt);
+    warnings.insert(warnings.end(), g.warnings.begin(), g.warnings.end());
+    const GazeboTags gz = robot_gazebo_tags(e, m, "");
+    for (const GeometryObject& go : g.collisions) {
+      if (go.body < 0 || go.body > m.n) continue;
+      if (go.shape.type == ShapeType::Mesh &&
+          (!go.shape.mesh || go.shape.mesh->triangle_count() == 0)) {
+        throw SceneError(scene_name(scene) + ": robot '" + name + "': " +
+                         (go.warning.empty() ? "link '" + go.link + "': collision mesh '" +
+                                                   go.shape.resource + "' has no triangles"
+                                             : go.warning) +
+                         "; contact needs it");
+      }
+      CollisionObject o;
+      o.name = name + "/" + go.name;
+      o.link = name + "/" + go.link;
+      o.frame = first + go.body;
+      o.placement = go.placement;
+      o.shape = go.shape;
+      o.group = group;
+      o.mu = robot_mu;
+      gazebo_surface(gz, go.link, scene.dt, o);
+      objs.push_back(o);
+      scene_object.push_back(-1);
+      body.push_back(-1);
+    }
+    for (int i = 1; i <= m.n; ++i) opt.adjacent.push_back({first + m.parent[i], first + i});
+    if (!m.floating) opt.adjacent.push_back({first, CollisionObject::kWorld});
+    if (e.self_collision) opt.self_colliding_groups.push_back(group);
+    if (!e.srdf.empty()) {
+      std::vector<std::pair<std::string, std::string>> pairs;
+      try {
+        pairs = srdf_disabled_pairs(read_text(e.srdf, scene));
+      } catch (const std::invalid_argument& err) {
+        throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "': " + err.what());
+      }
+      for (const auto& p : pairs) {
+        for (const std::string* l : {&p.first, &p.second}) {
+          if (m.link_index(*l) < 0) {
+            throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "' names link '" + *l +
+                             "', which robot '" + name + "' lacks");
+          }
+        }
+        opt.disabled_links.push_back({name + "/" + p.first, name + "/" + p.second});
+      }
+    }
+  }
+  sc.robot_frames = next - robot_bodies - sc.free_objects;
   if (scene.constraints.ground) {
     CollisionObject g;
     g.name = "ground";

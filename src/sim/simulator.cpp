@@ -118,8 +118,11 @@ const std::vector<CollisionObject>* Simulator::contact_objects() const {
 }
 
 void Simulator::set_scene_collision(SceneCollision&& collision) {
+  int robot_frames = 0;
+  for (const auto& r : extra_) robot_frames += r->model->n + 1;
   if (collision.robot_bodies != model_->n + 1 ||
-      collision.free_objects != static_cast<int>(bodies_.size())) {
+      collision.free_objects != static_cast<int>(bodies_.size()) ||
+      (collision.robot_frames != 0 && collision.robot_frames != robot_frames)) {
     throw std::invalid_argument(
         "scene collision frames do not match the simulator's robot and "
         "free objects");
@@ -129,7 +132,7 @@ void Simulator::set_scene_collision(SceneCollision&& collision) {
   // ground only as the reason for velocity-level steps.
   spec_.contacts.clear();
   spec_.contacts_from_collisions = false;
-  frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
+  frame_poses_.assign(model_->n + 1 + bodies_.size() + collision.robot_frames, SE3());
   free_poses_.assign(bodies_.size(), SE3());
   collision_data_.contacts.reserve(256);
   rebuild_constraints();
@@ -495,6 +498,14 @@ double Simulator::collide_objects() {
     }
     for (size_t j = 0; j < bodies_.size(); ++j) free_poses_[j] = body_states_[j].base;
     scene_frame_poses(*oMb, free_poses_, frame_poses_);
+    if (scene_collision_->robot_frames > 0) {  // the other robots' bodies after the objects
+      size_t f = frame_poses_.size();
+      frame_poses_.resize(f + scene_collision_->robot_frames);  // within its capacity
+      for (const auto& r : extra_) {
+        forward_kinematics(*r->model, r->diag, r->state.base, r->state.q);
+        for (int i = 0; i <= r->model->n; ++i) frame_poses_[f++] = r->diag.oMb[i];
+      }
+    }
   } else {
     for (size_t j = 0; j < bodies_.size(); ++j) {
       frame_poses_[model_->n + 1 + j] = body_states_[j].base;
@@ -546,7 +557,12 @@ void Simulator::rebuild_constraints() {
     constraints_->set_free_bodies(body_models_, static_cast<int>(16 * bodies_.size()));
   }
   if (scene_collision_) {
-    constraints_->set_free_bodies(body_models_, 64 + static_cast<int>(16 * bodies_.size()));
+    std::vector<bool> limits;
+    for (const auto& r : extra_)
+      limits.push_back(r->constraints && r->constraints->spec().joint_limits);
+    constraints_->set_free_bodies(
+        body_models_, 64 + static_cast<int>(16 * (bodies_.size() + extra_.size())),
+        coupled_robots() ? extra_robot_models() : std::vector<const Model*>{}, limits);
   }
   constraints_->anchor(initial_);
   State x = initial_;
@@ -647,7 +663,9 @@ bool Simulator::energy_ok() {
 // Invariant between steps: last_good_ is the state, and time and step count are its.
 bool Simulator::step() {
   if (!failure_.empty()) return false;
-  if (!extra_.empty() && !step_extra_robots()) return false;
+  const bool coupled = !extra_.empty() && coupled_robots();
+  if (!extra_.empty() && !coupled && !step_extra_robots()) return false;
+  if (coupled) prepare_coupled_robots();
   const VecX& tau = step_forces();
   const int nv = model_->nv;
   const double P0 = dot(nv, tau.data(), state_.v.data()) + passive_power_;  // at the start
@@ -664,8 +682,13 @@ bool Simulator::step() {
       cb.a_free = &body_a_;
       cb.contacts = &collision_data_.contacts;
       cb.objects = &collider()->objects();
+      if (coupled) {
+        cb.robot_states = &extra_states_;
+        cb.robot_a_free = &extra_a_;
+      }
     }
     info = constrained_step(*constraints_, *stepper_, state_, tau, config_.dt, cb);
+    if (coupled && info.ok) finish_coupled_robots(info);
   } else {
     info = stepper_->step(state_, tau, config_.dt);
   }
@@ -872,14 +895,15 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   cfg.stepper.tol = scene.tol;
   cfg.stepper.friction_eps = scene.friction_eps;
   auto sim = std::make_unique<Simulator>(std::move(m), x, cfg);
+  add_scene_robots(*sim, scene);  // before the scene collision, which holds their shapes
   const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
   if (!spec.empty()) sim->set_constraints(spec);
   if (!scene.objects.empty()) sim->set_objects(scene.objects);
   if (uses_scene_collision(scene)) {
     const GeometryModel none;
     const bool robot = !(urdf_xml.empty() && scene.robot_path.empty());
-    sim->set_scene_collision(
-        scene_collision(scene, &sim->model(), robot ? nullptr : &none, urdf_xml));
+    sim->set_scene_collision(scene_collision(scene, &sim->model(), robot ? nullptr : &none,
+                                             urdf_xml, sim->extra_robot_models()));
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   set_gazebo_gravity(*sim, scene_urdf_text(scene, urdf_xml));
@@ -887,7 +911,6 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
     sim->set_robot_name(scene.robot_name.empty() ? sim->robot_name() : scene.robot_name,
                         scene.robot_namespace);
   }
-  add_scene_robots(*sim, scene);
   return sim;
 }
 

@@ -209,6 +209,11 @@ WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
 }
 
 WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
+  if (coupled_robots()) {
+    throw WorldError(WorldError::Kind::Invalid,
+                     "objects cannot be spawned, deleted or moved yet in a scene whose robots "
+                     "touch each other (docs/multi_robot.md)");
+  }
   WorldEditPtr e(new WorldEdit);
   e->generation = world_generation_;
   const int first_frame = model_->n + 1;

@@ -292,7 +292,9 @@ void ConstraintSystem::anchor(const State& x) {
 }
 
 void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
-                                       int max_external_contacts) {
+                                       int max_external_contacts,
+                                       const std::vector<const Model*>& robots,
+                                       const std::vector<bool>& robot_limits) {
   free_.clear();
   free_.reserve(bodies.size());
   for (const Model* m : bodies) {
@@ -311,19 +313,43 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
     free_.push_back(std::move(f));
   }
   nv_total_ = model_.nv + 6 * static_cast<int>(free_.size());
+  art_.clear();
+  art_.reserve(robots.size());
+  int art_bodies = 0, art_limit_rows = 0;
+  for (size_t k = 0; k < robots.size(); ++k) {
+    const Model* m = robots[k];
+    if (!m) throw ModelError("a robot beside the system is null");
+    art_.emplace_back(*m);
+    ArtSystem& a = art_.back();
+    a.col0 = nv_total_;
+    a.limits = k < robot_limits.size() && robot_limits[k];
+    a.warm_lower.assign(m->n + 1, 0.0);
+    a.warm_upper.assign(m->n + 1, 0.0);
+    a.data.reserve_minv(*m);
+    if (a.limits) art_limit_rows += 2 * m->n;
+    nv_total_ += m->nv;
+    art_bodies += m->n + 1;
+  }
   systems_.clear();
   systems_.push_back(&kin_);
-  frames_.assign(model_.n + 1 + free_.size(), FrameRef{});
+  frames_.assign(model_.n + 1 + free_.size() + art_bodies, FrameRef{});
   for (int i = 0; i <= model_.n; ++i) frames_[i] = FrameRef{0, i};
   for (size_t j = 0; j < free_.size(); ++j) {
     free_[j].kin.reset(*free_[j].model, free_[j].pose, model_.nv + 6 * static_cast<int>(j));
     systems_.push_back(&free_[j].kin);
     frames_[model_.n + 1 + j] = FrameRef{static_cast<int>(j) + 1, 0};
   }
+  for (size_t k = 0, f = model_.n + 1 + free_.size(); k < art_.size(); ++k) {
+    ArtSystem& a = art_[k];
+    a.kin.reset(*a.model, a.data.oMb, a.col0);
+    systems_.push_back(&a.kin);
+    const int s = static_cast<int>(1 + free_.size() + k);
+    for (int i = 0; i <= a.model->n; ++i) frames_[f++] = FrameRef{s, i};
+  }
   const int nc = static_cast<int>(contacts_.size());
   // Rows: bilateral, limits, the internal contacts, and room for contacts from outside.
   max_rows_ = nb_ + (spec_.joint_limits ? 2 * model_.n : 0) + 3 * nc +
-              3 * std::max(0, max_external_contacts);
+              3 * std::max(0, max_external_contacts) + art_limit_rows;
   rows_.reserve(nv_total_, max_rows_);
   ws_.reserve(max_rows_, nb_);
   Y_ = MatX::Zero(nv_total_, max_rows_);
@@ -352,6 +378,13 @@ void ConstraintSystem::set_free_bodies(const std::vector<const Model*>& bodies,
   warm_ext_count_ = 0;
 }
 
+ConstraintSystem::ArtSystem& ConstraintSystem::art_system_of_limit_row(int r) {
+  for (ArtSystem& a : art_) {
+    if (!rows_.J.row(r).segment(a.col0, a.model->nv).isZero(0)) return a;
+  }
+  return art_.back();  // not reached: such a row has its joint's column
+}
+
 void ConstraintSystem::bind() {
   // The kinematics views point into this object (a copy re-points them here).
   kin_.model = &model_;
@@ -360,6 +393,11 @@ void ConstraintSystem::bind() {
   for (size_t j = 0; j < free_.size(); ++j) {
     free_[j].kin.oMb = &free_[j].pose;
     systems_[j + 1] = &free_[j].kin;
+  }
+  for (size_t k = 0; k < art_.size(); ++k) {
+    art_[k].kin.model = art_[k].model;
+    art_[k].kin.oMb = &art_[k].data.oMb;
+    systems_[1 + free_.size() + k] = &art_[k].kin;
   }
 }
 
@@ -621,8 +659,8 @@ void ConstraintSystem::ground_contacts() {
 void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in) {
   // Joint-limit rows need no kinematics (their Jacobian is +-1 on the joint's column): a robot
   // with limits alone steps without a forward-kinematics pass (minv makes one when a row is in).
-  const bool need_kinematics =
-      nb_ > 0 || spec_.ground || !free_.empty() || (in.contacts && !in.contacts->empty());
+  const bool need_kinematics = nb_ > 0 || spec_.ground || !free_.empty() || !art_.empty() ||
+                               (in.contacts && !in.contacts->empty());
   if (need_kinematics) {
     kinematics(x.base, x.q, nullptr);
   } else {
@@ -631,6 +669,17 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
   for (size_t j = 0; j < free_.size(); ++j) {
     free_[j].pose[0] = (*in.bodies)[j].base;
     free_[j].kin.update_world_axes();
+  }
+  if (!art_.empty() && !in.robots) {
+    throw std::invalid_argument("velocity_step: the other robots' states are missing");
+  }
+  art_states_ = in.robots;
+  for (size_t k = 0; k < art_.size(); ++k) {
+    ArtSystem& a = art_[k];
+    const State& s = (*in.robots)[k];
+    forward_kinematics(*a.model, a.data, s.base, s.q);
+    a.kin.update_world_axes();
+    a.touched = false;
   }
   rows_.clear();
   // Bilateral rows, at the velocity level.
@@ -667,7 +716,9 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
   }
   internal_rows_end_ = rows_.count;
   if (in.contacts && in.objects && !in.contacts->empty()) {
-    const int room = (rows_.capacity() - rows_.count) / 3;
+    int art_limit_room = 0;  // kept for the other robots' limits, which come after
+    for (const ArtSystem& a : art_) art_limit_room += a.limits ? 2 * a.model->n : 0;
+    const int room = (rows_.capacity() - rows_.count - art_limit_room) / 3;
     if (static_cast<int>(in.contacts->size()) <= room) {
       add_contact_rows(rows_, *in.contacts, *in.objects, frames_, systems_, vfree_, h, params_);
     } else {  // the deepest first, as many as fit
@@ -679,6 +730,13 @@ void ConstraintSystem::build_rows(const State& x, double h, const StepInput& in)
       }
     }
   }
+  // The other robots' joint limits (id: the joint; the robot from the row's columns).
+  art_limit_rows_ = rows_.count;
+  for (size_t k = 0; k < art_.size(); ++k) {
+    if (art_[k].limits) {
+      add_joint_limit_rows(rows_, art_[k].kin, (*in.robots)[k].q, vfree_, h, params_);
+    }
+  }
 }
 
 bool ConstraintSystem::unilateral_within_reach(const State& x, const VecX& a_free, double h,
@@ -687,6 +745,10 @@ bool ConstraintSystem::unilateral_within_reach(const State& x, const VecX& a_fre
   vfree_.head(model_.nv).noalias() += h * a_free;
   for (size_t j = 0; j < free_.size() && in.bodies; ++j) {
     vfree_.segment<6>(model_.nv + 6 * j) = (*in.bodies)[j].v + h * (*in.body_a_free)[j];
+  }
+  for (size_t k = 0; k < art_.size() && in.robots; ++k) {
+    const int nv = art_[k].model->nv;
+    vfree_.segment(art_[k].col0, nv) = (*in.robots)[k].v + h * (*in.robot_a_free)[k];
   }
   build_rows(x, h, in);
   for (int r = 0; r < rows_.count; ++r) {
@@ -740,6 +802,13 @@ bool ConstraintSystem::row_masks(int rows) {
     for (int j = 1; j < nsys; ++j) {
       if (!J.row(r).segment<6>(nvr + 6 * (j - 1)).isZero(0)) mask |= std::uint64_t(1) << j;
     }
+    for (size_t k = 0; k < art_.size(); ++k) {
+      ArtSystem& a = art_[k];
+      if (!J.row(r).segment(a.col0, a.model->nv).isZero(0)) {
+        mask |= std::uint64_t(1) << (nsys + k);
+        a.touched = true;
+      }
+    }
     row_mask_[r] = mask;
     robot_rows = robot_rows || (mask & 1);
   }
@@ -749,6 +818,24 @@ bool ConstraintSystem::row_masks(int rows) {
 void ConstraintSystem::free_body_inverse_mass_jacobian(int rows) {
   const int nvr = model_.nv;
   auto J = rows_.J.topRows(rows);
+  const int nsys = 1 + static_cast<int>(free_.size());
+  for (size_t k = 0; k < art_.size(); ++k) {
+    ArtSystem& a = art_[k];
+    const int nv = a.model->nv;
+    if (!a.touched) {
+      for (int r = 0; r < rows; ++r) Y_.col(r).segment(a.col0, nv).setZero();
+      continue;
+    }
+    const State& s = (*art_states_)[k];
+    const MatX& Minv = minv(*a.model, a.data, s.base, s.q);
+    for (int r = 0; r < rows; ++r) {
+      if (row_mask_[r] >> (nsys + k) & 1) {
+        Y_.col(r).segment(a.col0, nv).noalias() = Minv * J.row(r).segment(a.col0, nv).transpose();
+      } else {
+        Y_.col(r).segment(a.col0, nv).setZero();
+      }
+    }
+  }
   for (size_t j = 1; j <= free_.size(); ++j) {
     const int c0 = nvr + 6 * static_cast<int>(j - 1);
     const Mat6& Mi = free_[j - 1].Minv;
@@ -791,12 +878,19 @@ void ConstraintSystem::delassus(const State& x, int rows) {
   auto Y = Y_.leftCols(rows);
   data_to(x.base, x.q);
   const int nsys = 1 + static_cast<int>(free_.size());
-  if (nsys > 64) {  // dense (a mask per row holds 64 systems)
+  if (nsys + static_cast<int>(art_.size()) > 64) {  // dense (a mask per row holds 64 systems)
     const MatX& Minv = minv(m, data_, x.base, x.q);
     robot_delassus(rows_.J, rows, nvr, Minv, Y_, W_, delassus_ws_);
     for (size_t j = 0; j < free_.size(); ++j) {
       const int c0 = nvr + 6 * static_cast<int>(j);
       Y.middleRows(c0, 6).noalias() = free_[j].Minv * J.middleCols(c0, 6).transpose();
+    }
+    for (size_t k = 0; k < art_.size(); ++k) {
+      ArtSystem& a = art_[k];
+      const State& s = (*art_states_)[k];
+      a.touched = !J.middleCols(a.col0, a.model->nv).isZero(0);
+      Y.middleRows(a.col0, a.model->nv).noalias() =
+          minv(*a.model, a.data, s.base, s.q) * J.middleCols(a.col0, a.model->nv).transpose();
     }
     auto W = W_.topLeftCorner(rows, rows);
     W.triangularView<Eigen::Lower>() += J.rightCols(J.cols() - nvr) * Y.bottomRows(Y.rows() - nvr);
@@ -822,8 +916,13 @@ void ConstraintSystem::delassus(const State& x, int rows) {
         while (both) {
           const int j = __builtin_ctzll(both);
           both &= both - 1;
-          const int c0 = nvr + 6 * (j - 1);
-          w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
+          if (j < nsys) {
+            const int c0 = nvr + 6 * (j - 1);
+            w += J.row(r).segment<6>(c0).dot(Y.col(q).segment<6>(c0));
+          } else {
+            const ArtSystem& a = art_[j - nsys];
+            w += J.row(r).segment(a.col0, a.model->nv).dot(Y.col(q).segment(a.col0, a.model->nv));
+          }
         }
         W_(r, q) = robot_rows ? W_(r, q) + w : w;
       }
@@ -846,6 +945,10 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   for (size_t j = 0; j < free_.size(); ++j) {
     vfree_.segment<6>(nvr + 6 * j) = (*in.bodies)[j].v + h * (*in.body_a_free)[j];
   }
+  for (size_t k = 0; k < art_.size() && in.robots; ++k) {
+    const int nv = art_[k].model->nv;
+    vfree_.segment(art_[k].col0, nv) = (*in.robots)[k].v + h * (*in.robot_a_free)[k];
+  }
   build_rows(x, h, in);
   const int rows = rows_.count;
 
@@ -859,7 +962,12 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
       case RowType::Equality:  // below
         break;
       case RowType::JointLimit:
-        p_[r] = rows_.J(r, m.idx_v(id)) > 0 ? warm_lower_[id] : warm_upper_[id];
+        if (r < art_limit_rows_) {
+          p_[r] = rows_.J(r, m.idx_v(id)) > 0 ? warm_lower_[id] : warm_upper_[id];
+        } else {
+          const ArtSystem& a = art_system_of_limit_row(r);
+          p_[r] = rows_.J(r, a.col0 + a.model->idx_v(id)) > 0 ? a.warm_lower[id] : a.warm_upper[id];
+        }
         ++n_limits;
         break;
       case RowType::ContactNormal:
@@ -890,7 +998,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
     // The active set reads only the columns of W of the rows that carry impulse: when at most
     // half the rows start active, W's columns are formed as it asks for them.
     const bool lazy = opt_.solver == ContactSolver::ActiveSet && free_.size() < 64 &&
-                      lazy_columns_pay(c_, rows_, p_);
+                      art_.empty() && lazy_columns_pay(c_, rows_, p_);
     if (lazy) {
       lazy_delassus(x, rows);
       st = solve_active_set(lazy_w_, c_, rows_, p_, ws_, solver_opt_);
@@ -912,6 +1020,9 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   }
   x.v = vfree_.head(nvr);
   for (size_t j = 0; j < free_.size(); ++j) (*in.bodies)[j].v = vfree_.segment<6>(nvr + 6 * j);
+  for (size_t k = 0; k < art_.size(); ++k) {
+    (*in.robots)[k].v = vfree_.segment(art_[k].col0, art_[k].model->nv);
+  }
   ++report_.solves;
   ++report_.velocity_steps;
 
@@ -960,6 +1071,15 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   warm_ext_.swap(warm_ext_next_);
   warm_ext_count_ = next;
   for (int i = 1; i <= m.n; ++i) warm_lower_[i] = warm_upper_[i] = 0;
+  for (ArtSystem& a : art_) {
+    std::fill(a.warm_lower.begin(), a.warm_lower.end(), 0.0);
+    std::fill(a.warm_upper.begin(), a.warm_upper.end(), 0.0);
+  }
+  for (int r = art_limit_rows_; r < rows; ++r) {
+    ArtSystem& a = art_system_of_limit_row(r);
+    const int id = rows_.id[r];
+    (rows_.J(r, a.col0 + a.model->idx_v(id)) > 0 ? a.warm_lower : a.warm_upper)[id] = p_[r];
+  }
   for (Vec3& w : warm_contact_) w.setZero();
   for (int r = nb_; r < internal_rows_end_; ++r) {
     const int id = rows_.id[r];
@@ -989,6 +1109,7 @@ bool ConstraintSystem::velocity_step(State& x, const VecX& a_free, double h, con
   report_.pgs_change = change;
   bool finite = x.v.allFinite();
   for (size_t j = 0; j < free_.size(); ++j) finite = finite && (*in.bodies)[j].v.allFinite();
+  for (size_t k = 0; k < art_.size(); ++k) finite = finite && (*in.robots)[k].v.allFinite();
   return finite;
 }
 
