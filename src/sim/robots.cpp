@@ -284,6 +284,8 @@ void Simulator::reset_extra_robot(ExtraRobot& r) {
 void Simulator::remove_robot(int k) {
   extra(k);  // checks k
   extra_.erase(extra_.begin() + (k - 1));
+  extra_states_.erase(extra_states_.begin() + (k - 1));
+  extra_a_.erase(extra_a_.begin() + (k - 1));
 }
 
 void add_scene_robots(Simulator& sim, const Scene& scene) {

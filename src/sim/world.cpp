@@ -193,6 +193,14 @@ WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
     throw WorldError(WorldError::Kind::Invalid,
                      "name '" + name + "' is the simulator's first robot, which cannot be deleted");
   } else if (k > 0) {
+    // Its shapes are in the scene collision with frames of their own (the later robots' frames
+    // would move down): not yet.
+    if (coupled_robots()) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       "robot '" + name +
+                           "' cannot be deleted yet in a scene whose robots touch each other "
+                           "(docs/multi_robot.md)");
+    }
     WorldEditPtr e(new WorldEdit);
     e->generation = world_generation_;
     e->robot = true;
@@ -615,6 +623,13 @@ bool namespace_ok(const std::string& ns) {
 WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   using K = WorldError::Kind;
   if (sp.urdf.empty()) throw WorldError(K::Resource, "urdf is empty");
+  // The scene collision holds every robot's shapes with frames of their own: a robot joins it
+  // only when the simulator is built (docs/multi_robot.md).
+  if (scene_collision_) {
+    throw WorldError(K::Invalid,
+                     "robots cannot be spawned yet into a scene with collision (objects, "
+                     "self-collision or contacts from collisions: docs/multi_robot.md)");
+  }
   Model m;
   try {
     const UrdfDocument doc = parse_urdf_document(sp.urdf);
