@@ -13,8 +13,11 @@
 //                                       built with OSMesa; as bench_render's RGB comparison)
 //
 //   bench_sensors [google-benchmark flags]     medians of 9 repetitions
-//   bench_sensors --frames=N [--depth-only] [--size=WxH]   N camera frames only, 640x480
-//                                              unless --size (for callgrind:
+//   bench_sensors --frames=N [--depth-only] [--size=WxH] [--dump=FILE]   N camera frames only,
+//                                              640x480 unless --size; --dump writes the last
+//                                              frame's rgb8, depth and cloud bytes to FILE (to
+//                                              compare two builds' images bit for bit) (for
+//                                              callgrind:
 //     valgrind --tool=callgrind --toggle-collect='se3::render::CameraSensor::render*'
 //              bench_sensors --frames=10; a frame's count is the difference of two N)
 #include <benchmark/benchmark.h>
@@ -278,7 +281,7 @@ void BM_LlvmpipeDepth(benchmark::State& state, int W, int H) {
 }
 #endif
 
-int frames_only(int n, bool color, int width, int height) {
+int frames_only(int n, bool color, int width, int height, const std::string& dump) {
   const World& w = world();
   render::CameraSensorSpec spec;
   spec.width = width;
@@ -292,6 +295,17 @@ int frames_only(int n, bool color, int width, int height) {
   for (int k = 0; k < n; ++k) cam.render(w.camera, w.oMb, w.objects);
   std::printf("%d frames, centre depth %.4f m\n", n,
               cam.depth()[std::size_t(height / 2) * width + width / 2]);
+  if (!dump.empty()) {
+    std::FILE* f = std::fopen(dump.c_str(), "wb");
+    if (!f) {
+      std::fprintf(stderr, "cannot write %s\n", dump.c_str());
+      return 1;
+    }
+    std::fwrite(cam.rgb().data(), 1, cam.rgb().size(), f);
+    std::fwrite(cam.depth().data(), sizeof(float), cam.depth().size(), f);
+    std::fwrite(cam.cloud().data(), sizeof(float), cam.cloud().size(), f);
+    std::fclose(f);
+  }
   return 0;
 }
 
@@ -302,9 +316,12 @@ int main(int argc, char** argv) {
   int frames = 0;
   bool color = true;
   int width = 640, height = 480;
+  std::string dump;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a.rfind("--frames=", 0) == 0) {
+    if (a.rfind("--dump=", 0) == 0) {
+      dump = a.substr(7);
+    } else if (a.rfind("--frames=", 0) == 0) {
       frames = std::stoi(a.substr(9));
     } else if (a == "--depth-only") {
       color = false;
@@ -315,7 +332,7 @@ int main(int argc, char** argv) {
       rest.push_back(argv[i]);
     }
   }
-  if (frames > 0) return frames_only(frames, color, width, height);
+  if (frames > 0) return frames_only(frames, color, width, height, dump);
   auto reg = [](benchmark::internal::Benchmark* b) {
     b->Unit(benchmark::kMillisecond)
         ->MeasureProcessCPUTime()

@@ -263,6 +263,37 @@ TEST(CameraSensor, DepthOnlyGivesTheSameDepthBitForBit) {
       std::memcmp(colour.cloud().data(), depth_only.cloud().data(), 4 * colour.cloud().size()), 0);
 }
 
+// The rgb8 image is the framebuffer's colours, the same bytes whether it is written with the
+// depth and cloud (one pass) or without depth; an odd width leaves a row tail past the last
+// group of eight.
+TEST(CameraSensor, RgbIsTheFramebufferWithOrWithoutDepth) {
+  CameraSensorSpec s = odd_spec();
+  s.ground = true;
+  const SE3 pose(optical_in_body() * Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix(),
+                 Vec3(0, 0.1, 1));
+  CameraSensor with_depth(s);
+  s.depth = false;
+  CameraSensor rgb_only(s);
+  for (int frame = 0; frame < 2; ++frame) {
+    with_depth.render(pose, {}, the_box());
+    rgb_only.render(pose, {}, the_box());
+    ASSERT_EQ(with_depth.rgb(), rgb_only.rgb());
+    const Renderer& r = with_depth.renderer();
+    int boxed = 0;
+    for (int y = 0; y < s.height; ++y) {
+      for (int x = 0; x < s.width; ++x) {
+        const Rgb q = r.framebuffer().rgb(x, y);
+        const uint8_t* p = &with_depth.rgb()[3 * (std::size_t(y) * s.width + x)];
+        ASSERT_EQ(int(p[0]), int(q.r)) << x << " " << y;
+        ASSERT_EQ(int(p[1]), int(q.g)) << x << " " << y;
+        ASSERT_EQ(int(p[2]), int(q.b)) << x << " " << y;
+        boxed += q.r > q.g + 60;
+      }
+    }
+    EXPECT_GT(boxed, 5000) << "the red box is in the image";
+  }
+}
+
 // A camera sees the ground plane, not the viewer's grid lines: looking down at the origin
 // (where the grid's axes cross) every pixel is the background's colour.
 TEST(CameraSensor, NoGridLinesInTheImage) {

@@ -448,6 +448,56 @@ TEST(RenderRaster, IndexedFrontEndMatchesTheOtherPaths) {
   }
 }
 
+// VertexArrays without outcodes (out null: every vertex inside) draw as with all-zero
+// outcodes, on every path, in the eight-wide front end and its one-at-a-time tail.
+TEST(RenderRaster, NullOutcodesDrawAsAllInside) {
+  std::vector<RasterPath> paths = {RasterPath::Scalar};
+  if (raster_has_simd()) paths.push_back(RasterPath::Sse2);
+  if (raster_best_path() == RasterPath::Avx2) paths.push_back(RasterPath::Avx2);
+  const int W = 203, H = 117, nv = 900;
+  uint32_t seed = 99u;
+  auto rnd = [&seed]() {  // [0, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  std::vector<int32_t> X(nv), Y(nv);
+  std::vector<float> Z(nv), KF(nv), KB(nv);
+  std::vector<uint8_t> out(nv, 0);
+  for (int i = 0; i < nv; ++i) {
+    X[i] = int32_t(rnd() * W * 16);
+    Y[i] = int32_t(rnd() * H * 16);
+    Z[i] = float(0.5 + rnd());
+    KF[i] = float(rnd());
+    KB[i] = float(rnd());
+  }
+  std::vector<uint32_t> idx;
+  for (int t = 0; t < 1003; ++t) {
+    const uint32_t a = uint32_t(rnd() * nv) % nv;
+    idx.insert(idx.end(),
+               {a, (a + 1 + uint32_t(rnd() * 5)) % nv, (a + 2 + uint32_t(rnd() * 5)) % nv});
+  }
+  const float rgb[3] = {200.0f, 120.0f, 40.0f};
+  for (RasterPath path : paths) {
+    Framebuffer with(W, H), without(W, H);
+    std::size_t n[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+      Framebuffer& fb = k == 0 ? with : without;
+      fb.set_path(path);
+      fb.clear_depth();
+      const VertexArrays va{X.data(),  Y.data(),  Z.data(),
+                            KF.data(), KB.data(), k == 0 ? out.data() : nullptr};
+      n[k] = fb.fill_indexed(va, idx.data(), idx.size() / 3, rgb, false, true, RowSet(), nullptr,
+                             nullptr);
+    }
+    EXPECT_GT(n[0], 500u);
+    EXPECT_EQ(n[0], n[1]) << "path " << int(path);
+    EXPECT_EQ(std::memcmp(with.color(), without.color(), 4 * std::size_t(W) * H), 0)
+        << "path " << int(path);
+    EXPECT_EQ(std::memcmp(with.depth(), without.depth(), 4 * std::size_t(W) * H), 0)
+        << "path " << int(path);
+  }
+}
+
 // A box marker turns with its orientation R (a satellite bus tumbles with its base): a 2 x 0.2 x
 // 0.2 m bar is wide on screen along world x, tall once R turns its x axis onto world z, and a
 // non-rotation R draws nothing.

@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -35,10 +36,14 @@ CameraSensorSpec clamped(CameraSensorSpec s) {
 // One row of the depth and cloud conversion eight pixels at a time, the same float operations
 // lane by lane as the loops in render() (so the same bits), from column 0 while i + 8 <= W;
 // returns where it stopped. The cloud's four fields of eight pixels by two 4 x 4 transposes.
+// rgb8 (when not null, with paint): the row's rgb8 bytes from the colours already loaded, as
+// Framebuffer::copy_rgb8 writes them, exactly 24 bytes a step.
 __attribute__((target("avx2"))) int cloud_row_avx2(int W, const float* zr, const float* a,
                                                    const uint32_t* cr, bool paint, float b,
                                                    float gb, float gx, float h, float near,
-                                                   float far, float* dr, float* pr) {
+                                                   float far, float* dr, float* pr, uint8_t* rgb8) {
+  const __m256i to_rgb = _mm256_setr_epi8(2, 1, 0, 6, 5, 4, 10, 9, 8, 14, 13, 12, -1, -1, -1, -1, 2,
+                                          1, 0, 6, 5, 4, 10, 9, 8, 14, 13, 12, -1, -1, -1, -1);
   const __m256 vnan = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
   const __m256 vnear = _mm256_set1_ps(near), vfar = _mm256_set1_ps(far);
   const __m256 vzero = _mm256_setzero_ps(), vone = _mm256_set1_ps(1.0f);
@@ -59,6 +64,17 @@ __attribute__((target("avx2"))) int cloud_row_avx2(int W, const float* zr, const
     const __m256 c =
         paint ? _mm256_castsi256_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(cr + i)))
               : vzero;
+    if (rgb8) {
+      const __m256i s = _mm256_shuffle_epi8(_mm256_castps_si256(c), to_rgb);
+      const __m128i lo = _mm256_castsi256_si128(s), hi = _mm256_extracti128_si256(s, 1);
+      const uint32_t lo2 = uint32_t(_mm_extract_epi32(lo, 2));
+      const uint32_t hi2 = uint32_t(_mm_extract_epi32(hi, 2));
+      uint8_t* o = rgb8 + 3 * i;
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(o), lo);
+      std::memcpy(o + 8, &lo2, 4);
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(o + 12), hi);
+      std::memcpy(o + 20, &hi2, 4);
+    }
     const __m256 t0 = _mm256_unpacklo_ps(x, y), t1 = _mm256_unpackhi_ps(x, y);
     const __m256 t2 = _mm256_unpacklo_ps(zz, c), t3 = _mm256_unpackhi_ps(zz, c);
     // r_k: pixel k in the low half, pixel k + 4 in the high half.
@@ -155,7 +171,15 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
   renderer_.set_camera(cam);
   renderer_.style().paint = color_;
   renderer_.render(oMb, markers);
-  if (color_) renderer_.copy_rgb8(rgb_.data());
+  // With depth on the AVX2 path the rgb8 bytes come out of the depth and cloud pass, which
+  // reads the colours anyway (one pass over the frame instead of two).
+#if SE3_CAMERA_AVX2
+  const bool fused =
+      color_ && spec_.depth && std::as_const(renderer_).framebuffer().path() == RasterPath::Avx2;
+#else
+  const bool fused = false;
+#endif
+  if (color_ && !fused) renderer_.copy_rgb8(rgb_.data());
   if (!spec_.depth) return;
 
   // Read through a const Renderer: its non-const framebuffer() drops the cached background.
@@ -190,7 +214,15 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
     const uint32_t* cr = color + row;
     int i = 0;
 #if SE3_CAMERA_AVX2
-    if (avx2) i = cloud_row_avx2(W, zr, a, cr, paint, b, gb, gx, h, near, far, dr, pr);
+    if (avx2) {
+      uint8_t* rgb8 = fused ? rgb_.data() + 3 * row : nullptr;
+      i = cloud_row_avx2(W, zr, a, cr, paint, b, gb, gx, h, near, far, dr, pr, rgb8);
+      for (int x = i; fused && x < W; ++x) {  // the row's last pixels, as copy_rgb8
+        rgb8[3 * x] = uint8_t(cr[x] >> 16);
+        rgb8[3 * x + 1] = uint8_t(cr[x] >> 8);
+        rgb8[3 * x + 2] = uint8_t(cr[x]);
+      }
+    }
 #endif
 #if defined(__SSE2__)
     // Four pixels at a time, the same float operations as the loop below (the same bits); the

@@ -81,6 +81,9 @@ struct ItemFrame {
   bool visible = false;
   std::size_t vbase = 0;  ///< first vertex in the frame buffers
   Rect rect;              ///< pixels it may cover (its box's image, or all)
+  /// The outcodes of its vertices or-ed, by the part that transformed them (transform's
+  /// caller): all zero, the triangle loops skip the per-triangle outcode test.
+  uint8_t outside[2] = {0, 0};
 };
 
 /// Glyphs of the overlay font, rendered once with Cairo; drawing text is then a blend.
@@ -120,9 +123,9 @@ struct Renderer::Impl {
   bool prepare(const RenderMesh& mesh, const SE3& pose, const Vec3& scale, const Camera& cam,
                const ClipPlanes& planes, const Eigen::Vector3d& light, std::size_t vbase,
                ItemFrame& f) const;
-  /// Vertices [v0, v1) of mesh into the buffers at f.vbase.
-  void transform(const RenderMesh& mesh, std::size_t v0, std::size_t v1, const ItemFrame& f,
-                 const Camera& cam, bool simd);
+  /// Vertices [v0, v1) of mesh into the buffers at f.vbase; returns their outcodes or-ed.
+  uint8_t transform(const RenderMesh& mesh, std::size_t v0, std::size_t v1, const ItemFrame& f,
+                    const Camera& cam, bool simd);
   /// The triangles of mesh, rows in `rows`; rgb (0..1) replaces the runs' colours when given.
   /// Returns the triangles set up.
   std::size_t triangles(const RenderMesh& mesh, const ItemFrame& f, const float* rgb,

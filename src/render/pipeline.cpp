@@ -63,7 +63,8 @@ inline float pos(float x) {
 __attribute__((target("avx2"))) std::size_t transform_avx2(
     const RenderMesh& mesh, std::size_t i, std::size_t v1, const float* m, float near, float xlo,
     float xhi, float ylo, float yhi, const float L[3], const float H[3], float ka, float kd,
-    float kh, int32_t* X_, int32_t* Y_, float* Z_, float* KF_, float* KB_, uint8_t* O_) {
+    float kh, int32_t* X_, int32_t* Y_, float* Z_, float* KF_, float* KB_, uint8_t* O_,
+    uint8_t& any) {
   __m256 M[12];
   for (int k = 0; k < 12; ++k) M[k] = _mm256_set1_ps(m[k]);
   const __m256 vnear = _mm256_set1_ps(near), vsub = _mm256_set1_ps(float(kSubpixel));
@@ -73,6 +74,7 @@ __attribute__((target("avx2"))) std::size_t transform_avx2(
   const __m256 Lx = _mm256_set1_ps(L[0]), Ly = _mm256_set1_ps(L[1]), Lz = _mm256_set1_ps(L[2]);
   const __m256 Hx = _mm256_set1_ps(H[0]), Hy = _mm256_set1_ps(H[1]), Hz = _mm256_set1_ps(H[2]);
   const __m256 ka8 = _mm256_set1_ps(ka), kd8 = _mm256_set1_ps(kd), kh8 = _mm256_set1_ps(kh);
+  __m256i codes_or = _mm256_setzero_si256();
   for (; i + 8 <= v1; i += 8) {
     const __m256 x = _mm256_loadu_ps(&mesh.px[i]), y = _mm256_loadu_ps(&mesh.py[i]),
                  z = _mm256_loadu_ps(&mesh.pz[i]);
@@ -104,15 +106,19 @@ __attribute__((target("avx2"))) std::size_t transform_avx2(
     __m256i code =
         _mm256_or_si256(_mm256_or_si256(_mm256_or_si256(l, r), _mm256_or_si256(t, b)), behind);
     code = _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(front), code), behind);
+    codes_or = _mm256_or_si256(codes_or, code);
     const __m256i none = _mm256_cmpeq_epi32(code, _mm256_setzero_si256());
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(X_ + i),
                         _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sx, vsub))));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(Y_ + i),
                         _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sy, vsub))));
     _mm256_storeu_ps(Z_ + i, _mm256_and_ps(front, inv));
-    alignas(32) int32_t codes[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(codes), code);
-    for (int k = 0; k < 8; ++k) O_[i + k] = uint8_t(codes[k]);
+    // The eight codes (at most 31) as bytes: c0..c3 and c4..c7 in the halves' low words.
+    const __m256i w16 = _mm256_packs_epi32(code, code);
+    const __m256i w8 = _mm256_packus_epi16(w16, w16);
+    _mm_storel_epi64(
+        reinterpret_cast<__m128i*>(O_ + i),
+        _mm_unpacklo_epi32(_mm256_castsi256_si128(w8), _mm256_extracti128_si256(w8, 1)));
     const __m256 nx = _mm256_loadu_ps(&mesh.nx[i]), ny = _mm256_loadu_ps(&mesh.ny[i]),
                  nz = _mm256_loadu_ps(&mesh.nz[i]);
     const __m256 dl = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(Lx, nx), _mm256_mul_ps(Ly, ny)),
@@ -127,6 +133,9 @@ __attribute__((target("avx2"))) std::size_t transform_avx2(
     _mm256_storeu_ps(KF_ + i, kf);
     _mm256_storeu_ps(KB_ + i, kb);
   }
+  alignas(32) int32_t lanes[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), codes_or);
+  for (int k = 0; k < 8; ++k) any |= uint8_t(lanes[k]);
   return i;
 }
 #endif
@@ -201,8 +210,8 @@ bool Renderer::Impl::prepare(const RenderMesh& mesh, const SE3& pose, const Vec3
   return true;
 }
 
-void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size_t v1,
-                               const ItemFrame& f, const Camera& cam, bool simd) {
+uint8_t Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size_t v1,
+                                  const ItemFrame& f, const Camera& cam, bool simd) {
   const float* m = f.m;
   const float near = float(cam.near);
   const float xlo = float(-kGuard), xhi = float(cam.width + kGuard);
@@ -215,10 +224,11 @@ void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size
   float* KB_ = KB.data() + f.vbase;
   uint8_t* O_ = out.data() + f.vbase;
   std::size_t i = v0;
+  uint8_t any = 0;
 #if SE3_PIPE_AVX2
   if (simd && !f.rescale && raster_best_path() == RasterPath::Avx2) {
     i = transform_avx2(mesh, i, v1, m, near, xlo, xhi, ylo, yhi, f.L, f.H, ka, kd, kh, X_, Y_, Z_,
-                       KF_, KB_, O_);
+                       KF_, KB_, O_, any);
   }
 #endif
 #if SE3_PIPE_SSE2
@@ -269,7 +279,10 @@ void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size
       _mm_storeu_ps(Z_ + i, _mm_and_ps(front, inv));
       alignas(16) int32_t codes[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(codes), code);
-      for (int k = 0; k < 4; ++k) O_[i + k] = uint8_t(codes[k]);
+      for (int k = 0; k < 4; ++k) {
+        O_[i + k] = uint8_t(codes[k]);
+        any |= uint8_t(codes[k]);
+      }
       const __m128 nx = _mm_loadu_ps(&mesh.nx[i]), ny = _mm_loadu_ps(&mesh.ny[i]),
                    nz = _mm_loadu_ps(&mesh.nz[i]);
       const __m128 dl =
@@ -309,6 +322,7 @@ void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size
     Y_[i] = code ? 0 : int32_t(std::lrint(sy * sub));
     Z_[i] = front ? inv : 0.0f;
     O_[i] = code;
+    any |= code;
     float nx = mesh.nx[i], ny = mesh.ny[i], nz = mesh.nz[i];
     if (f.rescale) {
       nx *= f.inv_scale[0];
@@ -325,6 +339,7 @@ void Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::size
     KF_[i] = ka + kd * pos(dl) + kh * pos(dh);
     KB_[i] = ka + kd * pos(0.0f - dl) + kh * pos(0.0f - dh);
   }
+  return any;
 }
 
 namespace {
@@ -384,8 +399,11 @@ std::size_t Renderer::Impl::triangles(const RenderMesh& mesh, const ItemFrame& f
                                       const ClipPlanes& planes, const RowSet& rows,
                                       Framebuffer& fb) const {
   if (!f.visible) return 0;
-  const VertexArrays v{X.data() + f.vbase,  Y.data() + f.vbase,  Z.data() + f.vbase,
-                       KF.data() + f.vbase, KB.data() + f.vbase, out.data() + f.vbase};
+  // No outcodes to test where every vertex is inside the guard band and in front.
+  const bool inside = (f.outside[0] | f.outside[1]) == 0;
+  const VertexArrays v{X.data() + f.vbase,  Y.data() + f.vbase,
+                       Z.data() + f.vbase,  KF.data() + f.vbase,
+                       KB.data() + f.vbase, inside ? nullptr : out.data() + f.vbase};
   std::size_t drawn = 0;
   for (const RenderMesh::Run& run : mesh.runs) {
     const Eigen::Vector3f c = rgb ? Eigen::Vector3f(rgb[0], rgb[1], rgb[2]) : run.rgb;

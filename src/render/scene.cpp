@@ -102,7 +102,7 @@ void Renderer::draw_mesh(const RenderMesh& mesh, const SE3& pose, const Vec3& sc
   I.next_dirty.add(f.rect);
   fb_.set_simd(style_.simd);
   fb_.set_paint(style_.paint);
-  I.transform(mesh, 0, mesh.vertex_count(), f, cam_, style_.simd);
+  f.outside[0] = I.transform(mesh, 0, mesh.vertex_count(), f, cam_, style_.simd);
   float c[3];
   if (rgb) {
     if (!rgb->allFinite()) return;
@@ -395,11 +395,13 @@ void Renderer::frame_part(int phase, int part, int parts) {
     for (const DrawItem& it : items_) total += it.mesh ? it.mesh->vertex_count() : 0;
     const std::size_t lo = total * part / parts, hi = total * (part + 1) / parts;
     for (std::size_t k = 0; k < items_.size(); ++k) {
-      const ItemFrame& f = I.frames[k];
+      ItemFrame& f = I.frames[k];
       if (!f.visible) continue;
       const std::size_t n = items_[k].mesh->vertex_count();
       const std::size_t a = std::max(f.vbase, lo), b = std::min(f.vbase + n, hi);
-      if (a < b) I.transform(*items_[k].mesh, a - f.vbase, b - f.vbase, f, cam_, style_.simd);
+      // Each part its own byte (the other part may write its own at the same time).
+      f.outside[part] =
+          a < b ? I.transform(*items_[k].mesh, a - f.vbase, b - f.vbase, f, cam_, style_.simd) : 0;
     }
   } else if (phase == 2) {
     std::size_t n = 0;
@@ -451,6 +453,7 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
     ItemFrame& f = I.frames[k];
     f.visible = false;
     f.vbase = vbase;
+    f.outside[0] = f.outside[1] = 0;
     if (!it.mesh) continue;
     vbase += it.mesh->vertex_count();
     const bool world = it.body == GeometryObject::kWorld;  // fixed in the world

@@ -731,7 +731,7 @@ __attribute__((always_inline))
 inline std::size_t
 indexed_one(const VertexArrays& v, uint32_t a, uint32_t b, uint32_t c, const float rgb[3],
             bool cull, bool outward, const Target& T, ClipCallback clip, void* ctx) {
-  const uint8_t oa = v.out[a], ob = v.out[b], oc = v.out[c];
+  const uint8_t oa = v.out ? v.out[a] : 0, ob = v.out ? v.out[b] : 0, oc = v.out ? v.out[c] : 0;
   if (oa | ob | oc) {
     if (!(oa & ob & oc) && clip) return clip(ctx, a, b, c);  // rare: clipped in 4-D
     return 0;
@@ -808,8 +808,10 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
   for (; i + 8 <= count; i += 8) {
     const uint32_t* g = t + 3 * i;
     unsigned slow = 0;
-    for (int k = 0; k < 8; ++k) {
-      slow |= unsigned((v.out[g[3 * k]] | v.out[g[3 * k + 1]] | v.out[g[3 * k + 2]]) != 0) << k;
+    if (v.out) {  // null: every vertex inside, none to clip
+      for (int k = 0; k < 8; ++k) {
+        slow |= unsigned((v.out[g[3 * k]] | v.out[g[3 * k + 1]] | v.out[g[3 * k + 2]]) != 0) << k;
+      }
     }
     const int* gi = reinterpret_cast<const int*>(g);
     const __m256i ia = _mm256_i32gather_epi32(gi, lane3, 4);

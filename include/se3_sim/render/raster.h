@@ -62,7 +62,7 @@ struct VertexArrays {
   const float* z;
   const float* kf;
   const float* kb;
-  const uint8_t* out;
+  const uint8_t* out;  ///< outcodes; null: every vertex inside (all zero)
 };
 /// Called for a triangle with a vertex outside (some outcode set, not all in one plane's
 /// half-space: it needs clipping); returns the triangles it drew.
