@@ -143,6 +143,23 @@ TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
   EXPECT_GT(checked, 20);
 }
 
+// The public headers mirror src/: include/se3_sim/LAYER/NAME.h belongs to LAYER, and every header
+// there is in the table above.
+TEST(Layers, EachPublicHeaderLivesInItsLayersFolder) {
+  const fs::path root = SE3_SIM_SOURCE_DIR;
+  int headers = 0;
+  for (const auto& e : fs::recursive_directory_iterator(root / "include" / "se3_sim")) {
+    if (e.path().extension() != ".h") continue;
+    ++headers;
+    const std::string rel = fs::relative(e.path(), root / "include").generic_string();
+    const auto it = kHeaderLayer.find(rel);
+    ASSERT_NE(it, kHeaderLayer.end()) << rel << " is in no layer of the table";
+    EXPECT_EQ(rel.substr(0, 9 + it->second.size()), "se3_sim/" + it->second + "/")
+        << rel << " belongs to layer " << it->second;
+  }
+  EXPECT_GT(headers, 30);
+}
+
 // roscpp and ROS messages only in the ros layer (src/ros, include/se3_sim/ros) and the nodes:
 // the library builds and is tested without them.
 TEST(Layers, OnlyTheRosLayerIncludesRos) {
