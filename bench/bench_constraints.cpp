@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/constraints.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/solver/constraints.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

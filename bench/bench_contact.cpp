@@ -32,9 +32,9 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/controllers.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/sim.h"
 
 #ifdef SE3_SIM_HAVE_MUJOCO
 #include <mujoco/mujoco.h>

@@ -6,7 +6,7 @@
 #include <random>
 #include <string>
 
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace {
 

@@ -38,9 +38,9 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 
 #ifdef SE3_SIM_HAVE_CALLGRIND
 #include <valgrind/callgrind.h>

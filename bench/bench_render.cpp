@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 
 #if SE3_SIM_HAVE_OSMESA
 #define GL_GLEXT_PROTOTYPES 1

@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/laser.h"
+#include "se3_sim/collision/laser.h"
 #include "se3_sim/render/camera_sensor.h"
 
 #if SE3_SIM_HAVE_OSMESA

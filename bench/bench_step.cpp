@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

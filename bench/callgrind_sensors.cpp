@@ -11,8 +11,8 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/sensors.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sensors.h"
+#include "se3_sim/sim/sim.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {

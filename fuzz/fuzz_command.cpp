@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "se3_sim/ros/convert.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace {
 

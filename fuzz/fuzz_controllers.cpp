@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const se3::Scene scene =

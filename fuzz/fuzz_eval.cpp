@@ -7,7 +7,7 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 #include "tools/se3_dyn/cli.h"
 
 namespace {

@@ -14,10 +14,10 @@
 #include <fstream>
 #include <string>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/model.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/model/model.h"
+#include "se3_sim/sim/sim.h"
 
 namespace {
 

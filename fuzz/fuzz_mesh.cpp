@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <string>
 
-#include "se3_sim/geometry.h"
+#include "se3_sim/geometry/geometry.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;

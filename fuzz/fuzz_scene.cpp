@@ -23,9 +23,9 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/controllers.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/sim.h"
 #include "sim/scene_reader.h"
 
 namespace {

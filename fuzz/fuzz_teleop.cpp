@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-#include "se3_sim/teleop.h"
+#include "se3_sim/teleop/teleop.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace se3::teleop;

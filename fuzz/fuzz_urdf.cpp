@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "model/urdf_guard.h"
-#include "se3_sim/dynamics.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/model.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/model/model.h"
 
 namespace {
 

@@ -12,9 +12,9 @@
 #include <new>
 #include <random>
 
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
-#include "se3_sim/world.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/world.h"
 #include "test_util.h"
 
 extern "C" {

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <vector>
 
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 using namespace se3;
 

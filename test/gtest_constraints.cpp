@@ -13,8 +13,8 @@
 #include <random>
 #include <string>
 
-#include "se3_sim/constraints.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/solver/constraints.h"
 
 using namespace se3;
 

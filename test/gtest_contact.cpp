@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "same_bits.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

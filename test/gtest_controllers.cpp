@@ -13,9 +13,9 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/controllers.h"
-#include "se3_sim/gain_check.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/gain_check.h"
+#include "se3_sim/sim/sim.h"
 #include "test_util.h"
 
 using namespace se3;

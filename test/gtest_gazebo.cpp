@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "error_of.h"
-#include "se3_sim/controllers.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

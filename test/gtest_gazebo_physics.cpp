@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/controllers.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/geometry.h"
+#include "se3_sim/geometry/geometry.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

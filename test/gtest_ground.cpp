@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/ground.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/ground.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "se3_sim/laser.h"
+#include "se3_sim/collision/laser.h"
 
 using namespace se3;
 

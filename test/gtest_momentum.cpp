@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/constraints.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/solver/constraints.h"
 
 using namespace se3;
 

@@ -8,9 +8,9 @@
 #include <functional>
 #include <string>
 
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
-#include "se3_sim/world.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/world.h"
 
 using namespace se3;
 

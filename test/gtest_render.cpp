@@ -8,7 +8,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 
 using namespace se3;
 using namespace se3::render;

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/render.h"
 #include "se3_sim/render/camera_sensor.h"
+#include "se3_sim/render/render.h"
 
 #ifndef SE3_SIM_SOURCE_DIR
 #define SE3_SIM_SOURCE_DIR "."

@@ -18,9 +18,9 @@
 
 #include "../src/sim/scene_reader.h"
 #include "error_of.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

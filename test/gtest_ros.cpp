@@ -14,7 +14,7 @@
 
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 using XmlRpc::XmlRpcValue;
 

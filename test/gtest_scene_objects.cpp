@@ -8,11 +8,11 @@
 #include <set>
 #include <string>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/dynamics.h"
-#include "se3_sim/render.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/render/render.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -6,11 +6,11 @@
 #include <cmath>
 #include <string>
 
-#include "se3_sim/laser.h"
-#include "se3_sim/laser_world.h"
+#include "se3_sim/collision/laser.h"
 #include "se3_sim/render/camera_sensor.h"
-#include "se3_sim/sim.h"
-#include "se3_sim/world.h"
+#include "se3_sim/sim/laser_world.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/world.h"
 
 using namespace se3;
 

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/sensors.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sensors.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "../src/sim/scene_reader.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 #include "test_util.h"
 
 using namespace se3;

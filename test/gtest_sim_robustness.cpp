@@ -18,9 +18,9 @@
 
 #include "../src/dynamics/tree_depth.h"
 #include "error_of.h"
-#include "se3_sim/constraint.h"
-#include "se3_sim/controllers.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/constraint/constraint.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

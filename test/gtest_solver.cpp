@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "same_bits.h"
-#include "se3_sim/constraint.h"
-#include "se3_sim/solver.h"
+#include "se3_sim/constraint/constraint.h"
+#include "se3_sim/solver/solver.h"
 #include "test_util.h"
 
 using namespace se3;

@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "../tools/charts/aba_long_double.h"
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/model.h"
-#include "se3_sim/teleop.h"
+#include "se3_sim/model/model.h"
+#include "se3_sim/teleop/teleop.h"
 
 using namespace se3::teleop;
 

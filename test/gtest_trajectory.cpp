@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "error_of.h"
-#include "se3_sim/controllers.h"
-#include "se3_sim/sim.h"
-#include "se3_sim/trajectory.h"
-#include "se3_sim/transmissions.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/trajectory.h"
+#include "se3_sim/sim/transmissions.h"
 
 using namespace se3;
 

@@ -6,8 +6,8 @@
 #include <functional>
 #include <string>
 
-#include "se3_sim/sim.h"
-#include "se3_sim/world.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/world.h"
 
 using namespace se3;
 

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 #include "test_util.h"
 
 #ifdef SE3_SIM_HAVE_DART

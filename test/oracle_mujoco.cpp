@@ -14,8 +14,8 @@
 #include <sstream>
 #include <string>
 
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 #include "test_util.h"
 
 #ifdef SE3_SIM_HAVE_MUJOCO

@@ -27,8 +27,8 @@
 #include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
-#include "se3_sim/lie.h"
-#include "se3_sim/model.h"
+#include "se3_sim/lie/lie.h"
+#include "se3_sim/model/model.h"
 
 namespace {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/lie.h"
-#include "se3_sim/model.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/lie/lie.h"
+#include "se3_sim/model/model.h"
 
 namespace se3_test {
 

@@ -1,7 +1,7 @@
 // The collision layer (collision.h) on FCL 0.7: objects as fcl::CollisionObjectd (meshes as the
 // fcl::Convexd of their hull), a dynamic AABB tree for the broad phase, FCL's distance and
 // collide for the narrow phase; half-spaces (the ground) are tested here in closed form.
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 #include <fcl/fcl.h>
 

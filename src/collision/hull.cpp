@@ -7,7 +7,7 @@ extern "C" {
 #include <cstdio>
 #include <stdexcept>
 
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 namespace se3 {
 namespace {

@@ -4,7 +4,7 @@
 #include <limits>
 #include <string>
 
-#include "se3_sim/laser.h"
+#include "se3_sim/collision/laser.h"
 
 namespace se3 {
 

@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 namespace se3 {
 

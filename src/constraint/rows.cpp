@@ -12,7 +12,7 @@
 #endif
 
 #include "../lie/simd.h"
-#include "se3_sim/constraint.h"
+#include "se3_sim/constraint/constraint.h"
 
 namespace se3 {
 

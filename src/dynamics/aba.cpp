@@ -16,7 +16,7 @@
 
 #include "joint.h"
 #include "lie/simd.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 #include "sincos.h"
 
 namespace se3 {

@@ -19,7 +19,7 @@
 
 #include "joint.h"
 #include "row_kernel.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

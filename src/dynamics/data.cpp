@@ -1,5 +1,5 @@
 #include "lie/simd.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 #include "tree_depth.h"
 
 namespace se3 {

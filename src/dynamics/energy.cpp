@@ -1,5 +1,5 @@
 // Energy, momentum and centre of mass of the whole system.
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

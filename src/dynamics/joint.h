@@ -19,7 +19,7 @@
 #include <cmath>
 #include <type_traits>
 
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 // The kernels below are instantiated per joint form (with_joint): forced inline so that each
 // recursion's step stays one function (GCC otherwise stops inlining the larger ones, with calls

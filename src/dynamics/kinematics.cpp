@@ -1,7 +1,7 @@
 // Forward kinematics: the product of exponentials f_0j = f_0 prod KK_k exp(S_k q_k) (section 5),
 // and the twist recursion (33) that every algorithm and the energy functions share.
 #include "joint.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 #include "sincos.h"
 
 namespace se3 {

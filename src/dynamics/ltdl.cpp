@@ -3,7 +3,7 @@
 // Numbering the dofs so that a dof's parent (Data::v_parent) precedes it, L(k, i) is non-zero
 // only for i an ancestor of k: eliminating the leaves first creates no fill-in, and every loop
 // below walks a dof's ancestors alone.
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

@@ -12,7 +12,7 @@
 #include <Eigen/Cholesky>
 
 #include "joint.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 namespace {

@@ -4,7 +4,7 @@
 // By composite inertias (eq. 50 at the root): D_00 = Ic_0, the whole tree locked into one rigid
 // body, and the column of dof k of body i is Ic_i S_k, Ic_i the composite inertia of i's subtree;
 // all of them in the base frame, where composite inertias add without transforms.
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

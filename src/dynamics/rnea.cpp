@@ -12,7 +12,7 @@
 #pragma GCC optimize("no-code-hoisting", "sched-pressure", "schedule-insns", "ira-loop-pressure")
 #endif
 #include "joint.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

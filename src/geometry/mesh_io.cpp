@@ -28,8 +28,8 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 namespace {

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/geometry.h"
+#include "se3_sim/geometry/geometry.h"
 
 namespace se3 {
 

@@ -7,8 +7,8 @@
 #include <set>
 #include <sstream>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 namespace {

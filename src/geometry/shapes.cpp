@@ -3,7 +3,7 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "se3_sim/geometry.h"
+#include "se3_sim/geometry/geometry.h"
 
 namespace se3 {
 namespace {

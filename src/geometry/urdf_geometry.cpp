@@ -9,7 +9,7 @@
 #include <map>
 #include <utility>
 
-#include "se3_sim/geometry.h"
+#include "se3_sim/geometry/geometry.h"
 
 namespace se3 {
 namespace {

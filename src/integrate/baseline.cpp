@@ -16,7 +16,7 @@
 #include <cmath>
 #include <string>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 #include "steppers.h"
 
 namespace se3 {

@@ -5,8 +5,8 @@
 #include <limits>
 #include <memory>
 
-#include "se3_sim/constraints.h"
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/solver/constraints.h"
 #include "steppers.h"
 
 namespace se3 {

@@ -6,7 +6,7 @@
 //   (V3) D_0(q+) v+ = Ad*_E^T D_0(q) v                         the base twist re-expressed
 #include <cmath>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 
 namespace se3 {
 

@@ -13,8 +13,8 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
-#include "se3_sim/format.h"
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/lie/format.h"
 
 namespace se3 {
 

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "lie/simd.h"
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 #include "steppers.h"
 
 namespace se3 {

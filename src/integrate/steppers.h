@@ -3,7 +3,7 @@
 
 #include <memory>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 
 namespace se3 {
 namespace detail {

@@ -43,7 +43,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 #include "steppers.h"
 
 namespace se3 {

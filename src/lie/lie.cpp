@@ -1,6 +1,6 @@
 // SO(3) / SE(3) maps of Reuss 2002, section 2 and 4, in forms that stay exact to machine
 // precision at theta -> 0 (series) and theta -> pi (no division by sin theta).
-#include "se3_sim/lie.h"
+#include "se3_sim/lie/lie.h"
 
 #include <cmath>
 #include <cstring>

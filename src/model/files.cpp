@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "se3_sim/limits.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 namespace {

@@ -1,5 +1,5 @@
 // The <gazebo> extension tags of a URDF (gazebo_tags.h).
-#include "se3_sim/gazebo_tags.h"
+#include "se3_sim/model/gazebo_tags.h"
 
 #include <tinyxml2.h>
 

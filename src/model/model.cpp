@@ -1,4 +1,4 @@
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 #include <Eigen/Cholesky>
 #include <cmath>

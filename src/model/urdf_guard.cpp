@@ -14,8 +14,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "se3_sim/limits.h"
-#include "se3_sim/model.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <urdf_model/model.h>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 

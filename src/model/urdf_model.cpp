@@ -12,8 +12,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "se3_sim/limits.h"
-#include "se3_sim/model.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/model/model.h"
 #include "urdf_guard.h"
 #include "urdf_mimic.h"
 #include "urdf_quirks.h"

@@ -9,7 +9,7 @@
 #include <regex>
 #include <set>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 namespace {

@@ -1,5 +1,5 @@
 // first_invalid_utf8 (limits.h): the one UTF-8 check of outside text (URDF and scene files).
-#include "se3_sim/limits.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 

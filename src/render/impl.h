@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 
 namespace se3 {
 namespace render {

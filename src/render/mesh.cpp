@@ -8,7 +8,7 @@
 #include <map>
 #include <tuple>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 
 namespace se3 {
 namespace render {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <set>
 
-#include "se3_sim/format.h"
+#include "se3_sim/lie/format.h"
 
 namespace se3_ros {
 

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "se3_sim/gazebo_tags.h"
+#include "se3_sim/model/gazebo_tags.h"
 
 namespace se3_ros {
 namespace {

@@ -15,10 +15,10 @@
 #include <random>
 #include <thread>
 
-#include "se3_sim/laser.h"
-#include "se3_sim/laser_world.h"
+#include "se3_sim/collision/laser.h"
 #include "se3_sim/render/camera_sensor.h"
 #include "se3_sim/ros/convert.h"
+#include "se3_sim/sim/laser_world.h"
 
 namespace se3_ros {
 

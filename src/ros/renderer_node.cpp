@@ -2,7 +2,7 @@
 // through ROS's package lookup), posed from TF, and publishes the image through image_transport
 // as renderer/image with renderer/camera_info (1280x1024 rgb8 by default), only while someone
 // subscribes; the same geometry goes to RViz as renderer/markers (MESH_RESOURCE markers with
-// the meshes' package:// names). An adapter over se3_sim_render (include/se3_sim/render.h;
+// the meshes' package:// names). An adapter over se3_sim_render (include/se3_sim/render/render.h;
 // the camera command convention is documented there) and src/ros/renderer_convert.h.
 //
 // Parameters (private): ~rate (Hz, 30), ~width (1280), ~height (1024), ~focal_px (1000),
@@ -41,7 +41,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 #include "se3_sim/ros/renderer_convert.h"
 
 namespace {

@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "se3_sim/JointTorques.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/model/limits.h"
 #include "se3_sim/ros/convert.h"
 
 namespace se3_ros {

@@ -36,8 +36,8 @@
 #include <vector>
 
 #include "se3_sim/JointTorques.h"
-#include "se3_sim/model.h"
-#include "se3_sim/teleop.h"
+#include "se3_sim/model/model.h"
+#include "se3_sim/teleop/teleop.h"
 
 namespace {
 

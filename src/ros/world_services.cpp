@@ -22,8 +22,8 @@
 #include "se3_sim/SetSimulationState.h"
 #include "se3_sim/SpawnEntity.h"
 #include "se3_sim/StepSimulation.h"
-#include "se3_sim/format.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/lie/format.h"
+#include "se3_sim/model/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 

@@ -19,7 +19,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 namespace {

@@ -1,5 +1,5 @@
 // Joint controllers with ros_control's conventions (controllers.h).
-#include "se3_sim/controllers.h"
+#include "se3_sim/sim/controllers.h"
 
 #include <yaml-cpp/yaml.h>
 

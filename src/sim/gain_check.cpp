@@ -1,4 +1,4 @@
-#include "se3_sim/gain_check.h"
+#include "se3_sim/sim/gain_check.h"
 
 #include <cmath>
 #include <cstdio>

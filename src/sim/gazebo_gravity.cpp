@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "se3_sim/gazebo_tags.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/model/gazebo_tags.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

@@ -1,11 +1,11 @@
 // The robot on the scene's ground (ground.h).
-#include "se3_sim/ground.h"
+#include "se3_sim/sim/ground.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "se3_sim/scene_collision.h"
+#include "se3_sim/sim/scene_collision.h"
 
 namespace se3 {
 namespace {

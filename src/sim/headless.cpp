@@ -7,10 +7,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "se3_sim/gain_check.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/sim/gain_check.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 namespace {

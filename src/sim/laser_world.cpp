@@ -1,5 +1,5 @@
 // What the laser scanners see: the robot's collision shapes, the objects and the ground.
-#include "se3_sim/laser_world.h"
+#include "se3_sim/sim/laser_world.h"
 
 #include <cmath>
 

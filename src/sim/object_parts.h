@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <limits>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/scene_objects.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/sim/scene_objects.h"
 
 namespace se3 {
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "se3_sim/format.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/lie/format.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

@@ -16,8 +16,8 @@
 #include "contact_scene.h"
 #include "scene_objects_reader.h"
 #include "scene_reader.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 namespace {

@@ -1,5 +1,5 @@
 // The collision model of a scene (scene_collision.h).
-#include "se3_sim/scene_collision.h"
+#include "se3_sim/sim/scene_collision.h"
 
 #include <sys/stat.h>
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "object_parts.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 namespace {

@@ -1,7 +1,7 @@
 // The geometry of a scene's robot, and the collision shapes its contact constraints may use.
 #include <cmath>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

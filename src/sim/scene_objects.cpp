@@ -26,7 +26,7 @@
 #include <unordered_set>
 
 #include "scene_objects_reader.h"
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 namespace se3 {
 namespace {

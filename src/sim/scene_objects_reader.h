@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "scene_reader.h"
-#include "se3_sim/scene_objects.h"
+#include "se3_sim/sim/scene_objects.h"
 
 namespace se3 {
 

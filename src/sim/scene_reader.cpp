@@ -11,8 +11,8 @@
 #include <sstream>
 #include <unordered_set>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3 {
 namespace {

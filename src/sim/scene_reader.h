@@ -20,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

@@ -7,7 +7,7 @@
 
 #include "../model/xml_text.h"
 #include "scene_reader.h"
-#include "se3_sim/sensors.h"
+#include "se3_sim/sim/sensors.h"
 
 namespace se3 {
 

@@ -1,15 +1,15 @@
 // SensorSet (sensors.h): IMU, force-torque and contact readings from a step's motion.
-#include "se3_sim/sensors.h"
+#include "se3_sim/sim/sensors.h"
 
 #include <urdf_model/model.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/constraints.h"
-#include "se3_sim/model.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/model/model.h"
+#include "se3_sim/sim/sim.h"
+#include "se3_sim/solver/constraints.h"
 
 namespace se3 {
 namespace {

@@ -7,10 +7,10 @@
 
 #include "lie/simd.h"
 #include "object_parts.h"
-#include "se3_sim/format.h"
-#include "se3_sim/ground.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/lie/format.h"
+#include "se3_sim/sim/ground.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

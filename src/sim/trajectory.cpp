@@ -1,5 +1,5 @@
 // Trajectory segments (trajectory.h).
-#include "se3_sim/trajectory.h"
+#include "se3_sim/sim/trajectory.h"
 
 namespace se3 {
 

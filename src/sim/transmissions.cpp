@@ -1,5 +1,5 @@
 // <transmission> elements of a URDF (transmissions.h).
-#include "se3_sim/transmissions.h"
+#include "se3_sim/sim/transmissions.h"
 
 #include <tinyxml2.h>
 

@@ -1,6 +1,6 @@
 // The world interface of the Simulator (world.h, sim.h): models, spawn and delete between steps,
 // model and link states.
-#include "se3_sim/world.h"
+#include "se3_sim/sim/world.h"
 
 #include <algorithm>
 #include <cctype>
@@ -11,9 +11,9 @@
 
 #include "object_parts.h"
 #include "scene_objects_reader.h"
-#include "se3_sim/constraint.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/constraint/constraint.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

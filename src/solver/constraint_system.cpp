@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "se3_sim/constraints.h"
+#include "se3_sim/solver/constraints.h"
 
 namespace se3 {
 

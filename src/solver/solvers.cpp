@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "../lie/simd.h"
-#include "se3_sim/solver.h"
+#include "se3_sim/solver/solver.h"
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #include <immintrin.h>
 #endif

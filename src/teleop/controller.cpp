@@ -6,8 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "se3_sim/model.h"
-#include "se3_sim/teleop.h"
+#include "se3_sim/model/model.h"
+#include "se3_sim/teleop/teleop.h"
 
 namespace se3 {
 namespace teleop {

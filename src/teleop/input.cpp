@@ -1,7 +1,7 @@
 // Terminal input decoder: a byte-at-a-time state machine (ground, ESC, CSI, SS3, X10 mouse).
 #include <cstdlib>
 
-#include "se3_sim/teleop.h"
+#include "se3_sim/teleop/teleop.h"
 
 namespace se3 {
 namespace teleop {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 namespace reference {

@@ -32,8 +32,8 @@
 #include "aba_long_double.h"
 #include "engines.h"
 #include "peers_charts.h"
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 
 using namespace se3;
 using se3::reference::aba_long_double;

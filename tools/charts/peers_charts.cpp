@@ -12,8 +12,8 @@
 #include <sstream>
 
 #include "engines.h"
-#include "se3_sim/integrate.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/sim/sim.h"
 
 #ifdef SE3_SIM_HAVE_DART
 #include "dart_peer.h"

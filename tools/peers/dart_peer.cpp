@@ -17,7 +17,7 @@
 #include <regex>
 #include <stdexcept>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3::peers {
 

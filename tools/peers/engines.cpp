@@ -3,7 +3,7 @@
 
 #include <stdexcept>
 
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 
 #ifdef SE3_SIM_HAVE_MUJOCO
 #include "mujoco_peer.h"

@@ -11,7 +11,7 @@
 #include <regex>
 #include <stdexcept>
 
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3::peers {
 namespace {

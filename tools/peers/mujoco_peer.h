@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3::peers {
 

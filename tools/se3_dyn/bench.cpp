@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "cli.h"
-#include "se3_sim/dynamics.h"
-#include "se3_sim/limits.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3_dyn {
 namespace {

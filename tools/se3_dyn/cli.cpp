@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "se3_sim/limits.h"
+#include "se3_sim/model/limits.h"
 
 namespace se3_dyn {
 

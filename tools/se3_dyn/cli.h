@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 namespace se3_dyn {
 

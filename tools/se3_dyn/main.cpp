@@ -6,7 +6,7 @@
 #include <new>
 
 #include "cli.h"
-#include "se3_sim/integrate.h"
+#include "se3_sim/integrate/integrate.h"
 
 namespace {
 

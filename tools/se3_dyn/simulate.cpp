@@ -5,9 +5,9 @@
 #include <cstdio>
 
 #include "cli.h"
-#include "se3_sim/render.h"
-#include "se3_sim/scene_collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/render/render.h"
+#include "se3_sim/sim/scene_collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3_dyn {
 

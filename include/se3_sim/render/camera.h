@@ -24,7 +24,7 @@
 
 #include <Eigen/Core>
 
-#include "se3_sim/lie.h"
+#include "se3_sim/lie/lie.h"
 
 namespace se3 {
 namespace render {

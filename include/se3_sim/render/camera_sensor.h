@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/render.h"
+#include "se3_sim/render/render.h"
 
 namespace se3 {
 namespace render {

@@ -17,8 +17,8 @@
 
 #include "se3_sim/ChainState.h"
 #include "se3_sim/JointTorques.h"
-#include "se3_sim/dynamics.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3_ros {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/controllers.h"
+#include "se3_sim/sim/controllers.h"
 
 namespace YAML {
 class Node;

@@ -20,8 +20,8 @@
 #include <tuple>
 #include <vector>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/render.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/render/render.h"
 
 namespace se3 {
 namespace ros_renderer {

@@ -1,7 +1,7 @@
 // The simulator node's world services and topics (docs/ros.md "World services"), shaped after
 // ROS 2's simulation_interfaces 1.0 in se3_sim's own srv files: spawn, delete, list, get and set
 // entity states, step, reset, play/pause, features; and the model_states and link_states topics
-// as gazebo_ros publishes them. Over the library's world interface (se3_sim/world.h); the node
+// as gazebo_ros publishes them. Over the library's world interface (se3_sim/sim/world.h); the node
 // lends its simulator, its lock and its pause, step and reset through WorldHooks.
 #pragma once
 
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "se3_sim/ros/robot_interfaces.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3_ros {
 

@@ -5,10 +5,10 @@
 
 #include <vector>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/constraints.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/scene_objects.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/sim/scene_objects.h"
+#include "se3_sim/solver/constraints.h"
 
 namespace se3 {
 

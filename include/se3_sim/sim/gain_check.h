@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/controllers.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/sim/controllers.h"
 
 namespace se3 {
 

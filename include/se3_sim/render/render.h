@@ -6,7 +6,7 @@
 //
 // ---- For `se3_dyn render MODEL.urdf [--floating] [--scene S] [--camera ...] --out frame.png`
 //
-//   #include "se3_sim/render.h"
+//   #include "se3_sim/render/render.h"
 //   se3::GeometryModel geom = se3::geometry_from_urdf_file(model, "robot.urdf");
 //   se3::render::RenderOptions opt;            // camera, pose, overlay, markers
 //   opt.base = f0;                              // base pose in the world (default identity)
@@ -52,9 +52,9 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/model.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/model/model.h"
 #include "se3_sim/render/camera.h"
 #include "se3_sim/render/raster.h"
 

@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/laser.h"
+#include "se3_sim/collision/laser.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 

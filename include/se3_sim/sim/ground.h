@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

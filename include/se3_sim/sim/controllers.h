@@ -60,8 +60,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/trajectory.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/sim/trajectory.h"
 
 namespace YAML {
 class Node;

@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/constraint.h"
+#include "se3_sim/constraint/constraint.h"
 
 namespace se3 {
 

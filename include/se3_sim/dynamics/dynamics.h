@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "se3_sim/model.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/lie.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/lie/lie.h"
 
 namespace se3 {
 

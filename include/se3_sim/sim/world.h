@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/dynamics.h"
-#include "se3_sim/scene_objects.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/sim/scene_objects.h"
 
 namespace se3 {
 

@@ -53,10 +53,10 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/constraint.h"
-#include "se3_sim/dynamics.h"
-#include "se3_sim/geometry.h"
-#include "se3_sim/solver.h"
+#include "se3_sim/constraint/constraint.h"
+#include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/solver/solver.h"
 
 namespace se3 {
 

@@ -68,8 +68,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/lie.h"
-#include "se3_sim/model.h"
+#include "se3_sim/lie/lie.h"
+#include "se3_sim/model/model.h"
 
 namespace se3 {
 

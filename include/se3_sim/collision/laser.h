@@ -13,7 +13,7 @@
 
 #include <vector>
 
-#include "se3_sim/collision.h"
+#include "se3_sim/collision/collision.h"
 
 namespace se3 {
 

@@ -11,13 +11,13 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/constraints.h"
-#include "se3_sim/controllers.h"
-#include "se3_sim/integrate.h"
-#include "se3_sim/limits.h"
-#include "se3_sim/scene_objects.h"
-#include "se3_sim/sensors.h"
-#include "se3_sim/world.h"
+#include "se3_sim/integrate/integrate.h"
+#include "se3_sim/model/limits.h"
+#include "se3_sim/sim/controllers.h"
+#include "se3_sim/sim/scene_objects.h"
+#include "se3_sim/sim/sensors.h"
+#include "se3_sim/sim/world.h"
+#include "se3_sim/solver/constraints.h"
 
 namespace se3 {
 

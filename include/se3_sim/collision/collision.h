@@ -22,8 +22,8 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/geometry.h"
-#include "se3_sim/lie.h"
+#include "se3_sim/geometry/geometry.h"
+#include "se3_sim/lie/lie.h"
 
 namespace se3 {
 

@@ -19,8 +19,8 @@
 #include <utility>
 #include <vector>
 
-#include "se3_sim/gazebo_tags.h"
-#include "se3_sim/lie.h"
+#include "se3_sim/lie/lie.h"
+#include "se3_sim/model/gazebo_tags.h"
 
 namespace urdf {
 class ModelInterface;

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/sim.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/sim/sim.h"
 
 namespace se3 {
 

@@ -25,8 +25,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "se3_sim/collision.h"
-#include "se3_sim/dynamics.h"
+#include "se3_sim/collision/collision.h"
+#include "se3_sim/dynamics/dynamics.h"
 
 namespace se3 {
 
