@@ -623,13 +623,6 @@ bool namespace_ok(const std::string& ns) {
 WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   using K = WorldError::Kind;
   if (sp.urdf.empty()) throw WorldError(K::Resource, "urdf is empty");
-  // The scene collision holds every robot's shapes with frames of their own: a robot joins it
-  // only when the simulator is built (docs/multi_robot.md).
-  if (scene_collision_) {
-    throw WorldError(K::Invalid,
-                     "robots cannot be spawned yet into a scene with collision (objects, "
-                     "self-collision or contacts from collisions: docs/multi_robot.md)");
-  }
   Model m;
   try {
     const UrdfDocument doc = parse_urdf_document(sp.urdf);
@@ -671,6 +664,13 @@ WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   }
   const std::string what = "robot '" + name + "'";
   check_pose(sp.pose, what);
+  // After the request's own checks. The scene collision holds every robot's shapes with frames of
+  // their own: a robot joins it only when the simulator is built (docs/multi_robot.md).
+  if (scene_collision_) {
+    throw WorldError(K::Invalid,
+                     "robots cannot be spawned yet into a scene with collision (objects, "
+                     "self-collision or contacts from collisions: docs/multi_robot.md)");
+  }
   State x(m);
   x.base = sp.pose;
   for (int i = 1; i <= m.n; ++i) {
