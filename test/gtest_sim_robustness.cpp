@@ -19,6 +19,7 @@
 #include "../src/dynamics/tree_depth.h"
 #include "error_of.h"
 #include "se3_sim/constraint/constraint.h"
+#include "se3_sim/model/limits.h"
 #include "se3_sim/sim/controllers.h"
 #include "se3_sim/sim/sim.h"
 
@@ -344,4 +345,23 @@ int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   ::testing::FLAGS_gtest_death_test_style = "threadsafe";
   return RUN_ALL_TESTS();
+}
+
+// One rule for a time step: the scene reader, the simulator, se3_dyn and the node's ~dt all
+// refuse what dt_problem refuses (the simulator used to take any positive dt, 1e-12 included).
+TEST(TimeStep, OneRuleForEveryWayADtComesIn) {
+  for (double dt : {std::nan(""), HUGE_VAL, -1e-3, 0.0, 1e-10}) {
+    EXPECT_FALSE(se3::dt_problem(dt).empty()) << dt;
+    se3::SimConfig cfg;
+    cfg.dt = dt;
+    const se3::Model m = se3::make_chain(2, false);
+    try {
+      se3::Simulator sim(m, se3::State(m), cfg);
+      ADD_FAILURE() << "dt " << dt << " was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("dt "), std::string::npos) << e.what();
+    }
+  }
+  for (double dt : {1e-9, 1e-3, 0.1}) EXPECT_EQ(se3::dt_problem(dt), "") << dt;
+  EXPECT_EQ(se3::dt_problem(1e-10), "is below the smallest step, 1e-9 s (docs/robustness.md)");
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -105,6 +106,13 @@ std::string package_root(std::string dir) {
     if (dir == "/" || slash == std::string::npos) break;
     dir = slash == 0 ? "/" : dir.substr(0, slash);
   }
+  return "";
+}
+
+std::string dt_problem(double dt) {
+  if (!std::isfinite(dt)) return "is not a finite number";
+  if (!(dt > 0)) return "is not positive";
+  if (dt < limits::kMinDt) return "is below the smallest step, 1e-9 s (docs/robustness.md)";
   return "";
 }
 

@@ -362,7 +362,9 @@ void SimulatorNodeImpl::configure() {
   max_wrench_ = get_double(pnh_, "max_wrench").value_or(1e4);
   max_effort_ = get_double(pnh_, "max_effort").value_or(1e4);
   use_sim_time_ = get_bool(nh_, "/use_sim_time").value_or(false);
-  if (!(scene_.dt > 0)) throw std::runtime_error("~dt must be > 0");
+  if (const std::string why = se3::dt_problem(scene_.dt); !why.empty()) {
+    throw std::runtime_error("~dt " + se3::three_figures(scene_.dt) + " s " + why);
+  }
   if (!(scene_.tol > 0)) throw std::runtime_error("~tol must be > 0");
   if (!(scene_.real_time_factor >= 0)) throw std::runtime_error("~real_time_factor must be >= 0");
   if (!(scene_.publish_rate > 0)) throw std::runtime_error("~publish_rate must be > 0");

@@ -88,10 +88,9 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   if (!(o.duration >= 0) || !std::isfinite(o.duration)) {
     throw std::invalid_argument("duration must be a finite number >= 0");
   }
-  if (o.dt < 0 || !std::isfinite(o.dt)) throw std::invalid_argument("dt must be positive");
-  if (o.dt > 0 && o.dt < limits::kMinDt) {
-    throw std::invalid_argument("dt " + three_figures(o.dt) +
-                                " s is below the smallest step, 1e-9 s (docs/robustness.md)");
+  // dt 0: the scene's.
+  if (const std::string why = o.dt == 0 ? "" : dt_problem(o.dt); !why.empty()) {
+    throw std::invalid_argument("dt " + three_figures(o.dt) + " s " + why);
   }
   if (o.tol < 0 || !std::isfinite(o.tol)) throw std::invalid_argument("tol must be positive");
   Scene scene;

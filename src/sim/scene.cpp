@@ -165,9 +165,8 @@ const std::vector<std::pair<const char*, KeyReader>>& scene_keys() {
       {"dt",
        [](const SceneReader& r, const Field& v, Scene& s) {
          s.dt = r.positive(v);
-         if (s.dt < limits::kMinDt) {
-           r.fail(v, "'dt' is below the smallest step, 1e-9 s (docs/robustness.md)");
-         }
+         const std::string why = dt_problem(s.dt);
+         if (!why.empty()) r.fail(v, "'dt' " + why);
        }},
       {"tol", [](const SceneReader& r, const Field& v, Scene& s) { s.tol = r.positive(v); }},
       {"real_time_factor",

@@ -8,6 +8,7 @@
 #include "lie/simd.h"
 #include "object_parts.h"
 #include "se3_sim/lie/format.h"
+#include "se3_sim/model/limits.h"
 #include "se3_sim/sim/ground.h"
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
@@ -84,8 +85,8 @@ Simulator::Simulator(Model model, const State& initial, const SimConfig& config)
       forces_(VecX::Zero(model_->nv)),
       command_until_(model_->nv, kNever) {
   wrenches_.reserve(kMaxLinkWrenches);
-  if (!(config_.dt > 0) || !std::isfinite(config_.dt)) {
-    throw std::invalid_argument("dt must be positive and finite");
+  if (const std::string why = dt_problem(config_.dt); !why.empty()) {
+    throw std::invalid_argument("dt " + three_figures(config_.dt) + " s " + why);
   }
   if (config_.guard.energy_check_every < 1) config_.guard.energy_check_every = 1;
   stepper_ = make_stepper(config_.integrator, *model_, config_.stepper);

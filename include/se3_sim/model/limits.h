@@ -72,6 +72,12 @@ std::string not_a_regular_file(const std::string& path);
 /// scene's package:// and relative meshes are looked for.
 std::string package_root(std::string dir);
 
+/// The one rule for a time step, which the scene reader, the simulator, se3_dyn and the simulator
+/// node's ~dt apply: "" when dt is finite and at least limits::kMinDt, else why not, worded to
+/// follow the value's name ("is not a finite number", "is not positive", "is below the smallest
+/// step, 1e-9 s (docs/robustness.md)").
+std::string dt_problem(double dt);
+
 /// x with three significant figures ("1.5e+300"), for messages that quote an out-of-range value
 /// (std::to_string prints every digit).
 std::string three_figures(double x);
