@@ -16,7 +16,10 @@ std::vector<std::string> set_gazebo_gravity(Simulator& sim, const std::string& u
     links.push_back(lf.name);
     if (!lf.joint.empty()) joints.push_back(lf.joint);
   }
-  const GazeboTags tags = read_gazebo_tags(urdf_xml, links, joints);
+  return set_gazebo_gravity(sim, read_gazebo_tags(urdf_xml, links, joints));
+}
+
+std::vector<std::string> set_gazebo_gravity(Simulator& sim, const GazeboTags& tags) {
   // gazebo_ros_control's controlPeriod: the controllers update every so many steps.
   if (tags.control_period > 0) {
     sim.set_control_every(

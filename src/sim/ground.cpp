@@ -52,14 +52,18 @@ double lowest_collision_point(const Model& model, const GeometryModel& geometry,
   return low;
 }
 
+bool places_on_ground(const Scene& scene) {
+  return scene.robot_on_ground && scene.constraints.ground && !scene.base_pose_given;
+}
+
 SE3 base_on_ground(const Scene& scene, const Model& model, const State& x,
-                   const std::string& urdf_xml) {
+                   const std::string& urdf_xml, const GeometryModel* geometry) {
   const ConstraintSpec& c = scene.constraints;
-  if (!scene.robot_on_ground || !c.ground || scene.base_pose_given) return x.base;
+  if (!places_on_ground(scene)) return x.base;
   if (urdf_xml.empty() && scene.robot_path.empty()) return x.base;
   const Vec3 n = c.ground_normal.normalized();
-  const double low =
-      lowest_collision_point(model, scene_robot_geometry(scene, model, urdf_xml), x, n);
+  const double low = lowest_collision_point(
+      model, geometry ? *geometry : scene_robot_geometry(scene, model, urdf_xml), x, n);
   if (!std::isfinite(low)) return x.base;
   SE3 base = x.base;
   base.p += (c.ground_offset - low) * n;

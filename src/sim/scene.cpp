@@ -425,7 +425,7 @@ Scene load_scene(const std::string& path) {
   return parse_scene(text, dir_of(path), path);
 }
 
-Model scene_model(const Scene& scene, const std::string& urdf_xml) {
+Model scene_model(const Scene& scene, const std::string& urdf_xml, GazeboTags* gazebo) {
   Model m;
   if (urdf_xml.empty() && scene.robot_path.empty() && !scene.objects.empty()) {
     // Objects and no robot: an empty robot (a fixed base without mass or joints, nv = 0).
@@ -459,6 +459,7 @@ Model scene_model(const Scene& scene, const std::string& urdf_xml) {
       // Gazebo's <static>true</static>: the model does not fall (the scene's base: wins).
       if (!scene.base_given && doc.gazebo.is_static == 1) opt.floating = false;
       m = model_from_urdf(doc, opt);
+      if (gazebo) *gazebo = doc.gazebo;
     } catch (const ModelError& e) {
       // A locked joint the robot lacks is the scene's error: name the scene.
       const std::string what = e.what();

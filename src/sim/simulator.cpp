@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "lie/simd.h"
@@ -887,9 +888,18 @@ bool uses_scene_collision(const Scene& scene) {
 }
 
 std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string& urdf_xml) {
-  Model m = scene_model(scene, urdf_xml);
+  GazeboTags gazebo;  // from the one parse of the URDF
+  Model m = scene_model(scene, urdf_xml, &gazebo);
   State x = scene_state(scene, m);
-  x.base = base_on_ground(scene, m, x, urdf_xml);  // robot_on_ground: its lowest shape on it
+  // The robot's geometry with its meshes, loaded once for the ground placement and the
+  // collision model.
+  const bool robot = !(urdf_xml.empty() && scene.robot_path.empty());
+  std::optional<GeometryModel> geometry;
+  if (robot && (uses_scene_collision(scene) || places_on_ground(scene))) {
+    geometry = scene_robot_geometry(scene, m, urdf_xml);
+  }
+  const GeometryModel* g = geometry ? &*geometry : nullptr;
+  x.base = base_on_ground(scene, m, x, urdf_xml, g);  // robot_on_ground: its lowest shape on it
   SimConfig cfg;
   cfg.integrator = scene.integrator;
   cfg.dt = scene.dt;
@@ -902,12 +912,11 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   if (!scene.objects.empty()) sim->set_objects(scene.objects);
   if (uses_scene_collision(scene)) {
     const GeometryModel none;
-    const bool robot = !(urdf_xml.empty() && scene.robot_path.empty());
-    sim->set_scene_collision(scene_collision(scene, &sim->model(), robot ? nullptr : &none,
-                                             urdf_xml, sim->extra_robot_models()));
+    sim->set_scene_collision(scene_collision(scene, &sim->model(), robot ? g : &none, urdf_xml,
+                                             sim->extra_robot_models()));
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
-  set_gazebo_gravity(*sim, scene_urdf_text(scene, urdf_xml));
+  set_gazebo_gravity(*sim, gazebo);
   if (!scene.robot_name.empty() || !scene.robot_namespace.empty()) {
     sim->set_robot_name(scene.robot_name.empty() ? sim->robot_name() : scene.robot_name,
                         scene.robot_namespace);

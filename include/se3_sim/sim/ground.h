@@ -20,9 +20,12 @@ double lowest_collision_point(const Model& model, const GeometryModel& geometry,
 /// The base pose that puts the lowest collision point of the robot at state x on the scene's
 /// ground plane (x.base moved along the ground's normal); x.base when the scene does not ask for
 /// it (Scene::place_on_ground and a ground), says where the base goes (base_pose), or the robot
-/// has no collision shape. Meshes are resolved as scene_geometry does (urdf_xml as there).
+/// has no collision shape. geometry: the robot's (scene_robot_geometry), else loaded here from
+/// urdf_xml as scene_geometry does.
 SE3 base_on_ground(const Scene& scene, const Model& model, const State& x,
-                   const std::string& urdf_xml = "");
+                   const std::string& urdf_xml = "", const GeometryModel* geometry = nullptr);
+/// Whether base_on_ground moves the base for this scene (robot_on_ground, a ground, no base_pose).
+bool places_on_ground(const Scene& scene);
 
 /// One line when the scene has a ground that holds no part of its robot (neither the robot's
 /// collision shapes, ground: {from_collisions: true}, nor contacts: points), naming the scene

@@ -128,8 +128,10 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
 
 /// The model a scene names: its robot (or urdf_xml when not empty, e.g. robot_description),
 /// base free or fixed, locked joints, base inertia and gravity. Throws ModelError/SceneError
-/// (no robot at all; a locked joint the robot lacks, naming the scene).
-Model scene_model(const Scene& scene, const std::string& urdf_xml = "");
+/// (no robot at all; a locked joint the robot lacks, naming the scene). gazebo, when given,
+/// receives the URDF's <gazebo> tags from the same parse (empty for chain:N and no robot).
+Model scene_model(const Scene& scene, const std::string& urdf_xml = "",
+                  GazeboTags* gazebo = nullptr);
 /// The scene's initial state for model (a joint the model does not move is a SceneError naming
 /// the scene and the joint); continuous joints' angles wrapped into (-pi, pi].
 State scene_state(const Scene& scene, const Model& model);
@@ -688,6 +690,8 @@ void add_scene_robots(Simulator& sim, const Scene& scene);
 /// (Simulator::set_control_every, rounded to steps of dt); make_simulator does it. One line per
 /// link it could not apply.
 std::vector<std::string> set_gazebo_gravity(Simulator& sim, const std::string& urdf_xml);
+/// The same from tags already read (UrdfDocument::gazebo, scene_model's gazebo).
+std::vector<std::string> set_gazebo_gravity(Simulator& sim, const GazeboTags& tags);
 
 // ------------------------------------------------------------------ `se3_dyn simulate`
 /// Options of a headless run (the command line's `simulate`).
