@@ -16,12 +16,18 @@ log="$tmp/log"
 : > "$log"
 
 # urdfdom and console_bridge headers are the same for every architecture; /usr/include itself
-# holds x86-64 C library headers, so only these directories are given to the cross compiler.
-mkdir -p "$tmp/inc"
+# holds x86-64 C library headers, so only these directories are given to the cross compiler
+# (in a folder of the clone, whose path ccache hashes relative to the clone's parent).
+inc="$repo/.build/arm64-include"
+mkdir -p "$inc"
 for h in urdf_parser urdf_model urdf_world urdf_sensor urdf_exception urdf_model_state \
   console_bridge console_bridge_export.h; do
-  [[ -e /usr/include/$h ]] && ln -s "/usr/include/$h" "$tmp/inc/$h"
+  [[ -e /usr/include/$h ]] && ln -sfn "/usr/include/$h" "$inc/$h"
 done
+# ccache, when installed, serves what an earlier run (of any clone beside this one) compiled.
+launcher=""
+command -v ccache > /dev/null &&
+  launcher="env CCACHE_BASEDIR=$(dirname "$repo") CCACHE_NOHASHDIR=1 ccache"
 
 status=0
 if ! command -v "$cxx" > /dev/null; then
@@ -43,8 +49,8 @@ else
   printf '%s\n' "${jobs[@]}" | xargs -P "$(nproc)" -I{} bash -c '
     f=${1%%|*}; def=${1#*|}
     o="$2/$(echo "$f$def" | tr "/=" "__").o"
-    if ! out=$('"$cxx"' -std=gnu++17 -O1 -Wall -Wextra -Wno-psabi $def -Iinclude -Isrc \
-        -isystem /usr/include/eigen3 -isystem "$2/inc" -c "$f" -o "$o" 2>&1); then
+    if ! out=$('"$launcher $cxx"' -std=gnu++17 -O1 -Wall -Wextra -Wno-psabi $def -Iinclude -Isrc \
+        -isystem /usr/include/eigen3 -isystem '"$inc"' -c "$f" -o "$o" 2>&1); then
       printf "FAILED %s %s\n%s\n" "$f" "$def" "$out" >> "$2/log"
     else
       printf "ok %s %s\n" "$f" "$def" >> "$2/ok"
