@@ -541,38 +541,25 @@ std::string Simulator::set_link_state(const std::string& link, const LinkState& 
     m.twist = s.twist;
     return set_model_state(name, m);
   }
-  if (!robot_name_.empty() && (model.empty() || model == robot_name_)) {
-    const int k = model_->link_index(name);
-    if (k >= 0) {
-      const LinkFrame& L = model_->links[k];
-      if (L.body != 0 || !L.offset.R.isIdentity(0) || !L.offset.p.isZero(0)) {
-        throw WorldError(WorldError::Kind::Invalid,
-                         "link '" + link +
-                             "' is not the robot's root link: its pose follows from the "
-                             "joints (set the model state instead)");
-      }
-      ModelState m = model_state(robot_name_);
-      m.pose = s.pose;
-      m.twist = s.twist;
-      return set_model_state(robot_name_, m);
-    }
-  }
-  if (const int r = model.empty() ? -1 : robot_index(model); r >= 1) {
+  // A robot's root link (robot 0 by its name or without a model name, robots 1.. by theirs):
+  // its pose and twist are the robot's base state.
+  const int first = !robot_name_.empty() && (model.empty() || model == robot_name_) ? 0 : -1;
+  for (const int r : {first, model.empty() ? -1 : robot_index(model)}) {
+    if (r < 0) continue;
     const Model& m = robot_model(r);
     const int k = m.link_index(name);
-    if (k >= 0) {
-      const LinkFrame& L = m.links[k];
-      if (L.body != 0 || !L.offset.R.isIdentity(0) || !L.offset.p.isZero(0)) {
-        throw WorldError(WorldError::Kind::Invalid,
-                         "link '" + link +
-                             "' is not the robot's root link: its pose follows from the "
-                             "joints (set the model state instead)");
-      }
-      ModelState ms = model_state(model);
-      ms.pose = s.pose;
-      ms.twist = s.twist;
-      return set_model_state(model, ms);
+    if (k < 0) continue;
+    const LinkFrame& L = m.links[k];
+    if (L.body != 0 || !L.offset.R.isIdentity(0) || !L.offset.p.isZero(0)) {
+      throw WorldError(WorldError::Kind::Invalid,
+                       "link '" + link +
+                           "' is not the robot's root link: its pose follows from the joints "
+                           "(set the model state instead)");
     }
+    ModelState ms = model_state(robot_name(r));
+    ms.pose = s.pose;
+    ms.twist = s.twist;
+    return set_model_state(robot_name(r), ms);
   }
   throw WorldError(WorldError::Kind::NotFound, "link '" + link + "': no such link");
 }
