@@ -72,6 +72,9 @@ class MultiRobotTest(unittest.TestCase):
         return self.positions(who)
 
     def drive(self, who, joint, effort):
+        # rospy drops what a publisher sends before the node has connected to it; on a loaded
+        # machine that connection can come after the first joint_states.
+        self.assertTrue(self.wait_for(lambda: self.cmd[who].get_num_connections() > 0, 20.0), who)
         m = JointTorques()
         m.header.stamp = rospy.Time.now()
         m.name = [joint]
