@@ -413,6 +413,36 @@ TEST(Alloc, StepsAfterARobotSpawnOrDeleteAllocateNothing) {
   EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(100), 100) << sim->failure(); }), 0);
 }
 
+// Robots spawned into a scene with collision (their shapes in the scene collision, their
+// velocities in robot 0's contact step) and one deleted again: the steps after the first that
+// follows each allocate nothing while they rest on the ground. (A robot's box resting on the
+// block allocates inside FCL's box-box test whether the robot was spawned or listed in the
+// scene, as the UR5's meshes do above.)
+TEST(Alloc, StepsAfterARobotSpawnOrDeleteInASceneWithCollisionAllocateNothing) {
+  const std::string root = SE3_SIM_SOURCE_DIR;
+  auto sim = make_simulator(parse_scene(
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
+      "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
+      "robots:\n"
+      "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: free,"
+      " base_pose: {position: [0, 0, 0.2]}}\n",
+      root, "pendulums.yaml"));
+  RobotSpawn p;
+  std::string why;
+  ASSERT_TRUE(read_file(se3_test::robot_path("double_pendulum_simple.urdf"), p.urdf, &why)) << why;
+  p.base = RobotSpawn::Base::Free;
+  for (const char* name : {"b", "c"}) {
+    p.name = name;
+    p.pose.p = Vec3(name[0] == 'b' ? 1 : -1, 0, 0.2);
+    sim->spawn_robot(p);
+  }
+  ASSERT_EQ(sim->step_n(300), 300) << sim->failure();  // landed: contacts on every robot
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+  sim->delete_model("b");
+  ASSERT_EQ(sim->step_n(1), 1) << sim->failure();
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+}
+
 // A trajectory controller (quintic segments, the effort flavour) on the UR5 and a velocity
 // controller through the velocity interface: sampling the splines, the PIDs and the tolerance
 // checks allocate nothing in a step.

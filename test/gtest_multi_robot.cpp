@@ -129,6 +129,35 @@ TEST(MultiRobot, EachCommandMovesOnlyItsRobot) {
   }
 }
 
+// The command timeout holds for every robot: a torque command (and a free base's wrench) to a
+// robot after the first stops acting ceil(timeout / dt) steps after it was set, as robot 0's.
+TEST(MultiRobot, CommandTimeoutActsOnEveryRobot) {
+  auto sim = make_simulator(scene_of(kTwoArms));
+  sim->set_command_timeout(0.005);  // 5 steps of 1 ms
+  sim->set_robot_joint_effort(0, 1, 5.0);
+  sim->set_robot_joint_effort(1, 1, 5.0);
+  ASSERT_EQ(sim->step_n(5), 5) << sim->failure();
+  EXPECT_EQ(sim->robot_actuation(0)[0], 5.0);
+  EXPECT_EQ(sim->robot_actuation(1)[0], 5.0);
+  ASSERT_TRUE(sim->step()) << sim->failure();
+  EXPECT_EQ(sim->robot_actuation(0)[0], 0.0);
+  EXPECT_EQ(sim->robot_actuation(1)[0], 0.0) << "robot 1's stale command still acts";
+  // The robot coasts from then on: its joint rate stays as it was.
+  const double rate = sim->robot_state(1).v[0];
+  ASSERT_EQ(sim->step_n(20), 20) << sim->failure();
+  EXPECT_NEAR(sim->robot_state(1).v[0], rate, 1e-3 * std::abs(rate));
+  // A free base's wrench runs out the same way.
+  auto free = make_simulator(scene_of(two_floating()));
+  free->set_command_timeout(0.002);
+  Vec6 w = Vec6::Zero();
+  w[5] = 1.0;
+  free->set_robot_base_wrench(1, w);
+  ASSERT_EQ(free->step_n(2), 2);
+  EXPECT_EQ(free->robot_actuation(1)[5], 1.0);
+  ASSERT_TRUE(free->step());
+  EXPECT_EQ(free->robot_actuation(1)[5], 0.0);
+}
+
 // Each free-floating robot keeps its own momentum, and steps exactly as it would alone.
 TEST(MultiRobot, FreeFloatingRobotsKeepTheirOwnMomentum) {
   auto sim = make_simulator(scene_of(two_floating()));

@@ -4,7 +4,9 @@
 // field named and nothing changed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <string>
@@ -205,6 +207,172 @@ TEST(SpawnRobot, BadRequestsAreRefusedAndChangeNothing) {
   EXPECT_EQ(sim->robot_count(), 3);
   EXPECT_EQ(sim->step_n(20), 20);
   EXPECT_EQ(sim->failure(), "");
+}
+
+namespace {
+
+// A scene of robot "a" (the double pendulum, free base, 0.2 m above the ground at x = 0), a
+// static block 0.2 m high at x = 2, the ground, and `robots` (YAML robots: entries) after "a".
+std::unique_ptr<Simulator> pendulums(const std::string& robots = "") {
+  const std::string text =
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
+      "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
+      "robots:\n"
+      "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: free,"
+      " base_pose: {position: [0, 0, 0.2]}}\n" +
+      robots;
+  return make_simulator(parse_scene(text, kRoot, "pendulums.yaml"));
+}
+
+RobotSpawn pendulum(const std::string& name, double x, double z) {
+  RobotSpawn s;
+  s.urdf = text_of("data/robots/double_pendulum_simple.urdf");
+  s.name = name;
+  s.pose.p = Vec3(x, 0, z);
+  s.base = RobotSpawn::Base::Free;
+  return s;
+}
+
+// The contacts at the current state as text (the pair's names, depth, point and normal), one
+// a line, sorted: the same contacts whatever their order.
+std::vector<std::string> contact_lines(const Simulator& sim) {
+  std::vector<std::string> out;
+  const std::vector<CollisionObject>& o = *sim.contact_objects();
+  for (const Contact& c : sim.contacts()) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, " %.12f %.12f %.12f %.12f %.9f %.9f %.9f", c.depth, c.point.x(),
+                  c.point.y(), c.point.z(), c.normal.x(), c.normal.y(), c.normal.z());
+    out.push_back(o[c.a].name + " " + o[c.b].name + buf);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+// Robots spawned into a scene with collision collide as the scene's own robots 1.. do: their
+// shapes join the scene collision (a group of their own), so "b" dropped on the ground and "c"
+// dropped on the block come to rest on them, step for step as the same robots listed in the
+// scene's robots: do.
+TEST(SpawnRobot, SpawnedRobotsCollideAsSceneRobots) {
+  const std::string b =
+      "  - {name: b, urdf: data/robots/double_pendulum_simple.urdf, base: free,"
+      " base_pose: {position: [1, 0, 0.2]}}\n";
+  const std::string c =
+      "  - {name: c, urdf: data/robots/double_pendulum_simple.urdf, base: free,"
+      " base_pose: {position: [2, 0, 0.45]}}\n";
+  auto scene = pendulums(b + c);
+  auto sim = pendulums();
+  EXPECT_EQ(sim->spawn_robot(pendulum("b", 1, 0.2)), "b");
+  EXPECT_EQ(sim->spawn_robot(pendulum("c", 2, 0.45)), "c");
+  ASSERT_EQ(sim->robot_count(), 3);
+  int shapes = 0;
+  for (const CollisionObject& o : *sim->contact_objects()) {
+    shapes += o.name.compare(0, 2, "c/") == 0;
+  }
+  EXPECT_EQ(shapes, 3);  // c's three links
+  double worst = 0;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(sim->step()) << sim->failure();
+    ASSERT_TRUE(scene->step()) << scene->failure();
+    for (int r = 0; r < 3; ++r) {
+      const State &x = sim->robot_state(r), &y = scene->robot_state(r);
+      worst =
+          std::max({worst, (x.base.p - y.base.p).norm(), (x.q - y.q).norm(), (x.v - y.v).norm()});
+    }
+  }
+  EXPECT_LT(worst, 1e-9) << "a spawned robot does not step as the same robot of the scene";
+  // At rest on the ground (b) and on the block's top at z = 0.2 (c): not fallen through.
+  EXPECT_GT(sim->robot_state(1).base.p.z(), 0.0);
+  EXPECT_LT(sim->robot_state(1).base.p.z(), 0.1);
+  EXPECT_GT(sim->robot_state(2).base.p.z(), 0.2);
+  EXPECT_LT(sim->robot_state(2).base.p.z(), 0.3);
+  EXPECT_LT(sim->penetration_max(), 5e-3);
+}
+
+// Deleting a robot from a scene with collision removes its shapes: the others' contacts at the
+// same state are the same (the robots after it keep theirs though their frames move down), and
+// they stay on their supports (their free joints swing on); a new spawn lands as the first did.
+TEST(SpawnRobot, DeleteFromASceneWithCollisionKeepsTheOthersContacts) {
+  auto sim = pendulums(
+      "  - {name: b, urdf: data/robots/double_pendulum_simple.urdf, base: free,"
+      " base_pose: {position: [1, 0, 0.2]}}\n");
+  sim->spawn_robot(pendulum("c", 2, 0.45));
+  ASSERT_EQ(sim->step_n(1500), 1500) << sim->failure();
+  auto without = [](std::vector<std::string> lines, const std::string& robot) {
+    lines.erase(std::remove_if(lines.begin(), lines.end(),
+                               [&](const std::string& l) {
+                                 return l.compare(0, robot.size() + 1, robot + "/") == 0 ||
+                                        l.find(" " + robot + "/") != std::string::npos;
+                               }),
+                lines.end());
+    return lines;
+  };
+  const std::vector<std::string> before = contact_lines(*sim);
+  ASSERT_FALSE(without(before, "b").empty());
+  // Robot k's base on its support: above the ground (z = 0) or the block's top (z = 0.2), not
+  // through it.
+  auto on = [&](int k, double support) {
+    const double z = sim->robot_state(k).base.p.z() - support;
+    return z > 0 && z < 0.1;
+  };
+  WorldEditPtr edit = sim->prepare_delete("b");  // the scene's robot between a and c
+  EXPECT_EQ(sim->robot_count(), 3);
+  sim->commit(std::move(edit));
+  ASSERT_EQ(sim->robot_count(), 2);
+  EXPECT_EQ(sim->robot_index("c"), 1);
+  EXPECT_EQ(contact_lines(*sim), without(before, "b"));
+  for (const CollisionObject& o : *sim->contact_objects()) {
+    EXPECT_NE(o.name.compare(0, 2, "b/"), 0) << o.name;
+  }
+  ASSERT_EQ(sim->step_n(500), 500) << sim->failure();
+  EXPECT_TRUE(on(0, 0));
+  EXPECT_TRUE(on(1, 0.2));
+  // Objects spawn and go in a scene whose robots touch each other: the robots' frames after the
+  // free objects' move with their count, and c stays on the block.
+  sim->spawn_object(parse_scene_object(
+      "{name: ball, shape: {sphere: 0.05}, mass: 0.5, pose: {position: [-1, 0, 0.3]}}", kRoot));
+  ASSERT_EQ(sim->step_n(500), 500) << sim->failure();
+  EXPECT_NEAR(sim->model_state("ball").pose.p.z(), 0.05, 5e-3);
+  EXPECT_TRUE(on(0, 0));
+  EXPECT_TRUE(on(1, 0.2));
+  sim->delete_model("ball");
+  ASSERT_EQ(sim->step_n(200), 200) << sim->failure();
+  EXPECT_TRUE(on(1, 0.2));
+  sim->delete_model("c");
+  EXPECT_EQ(sim->robot_count(), 1);
+  sim->spawn_robot(pendulum("d", 1, 0.2));
+  ASSERT_EQ(sim->step_n(1000), 1000) << sim->failure();
+  EXPECT_TRUE(on(1, 0));
+}
+
+// The Panda's collision meshes load off the step (as convex hulls) when it is spawned into a
+// scene with collision.
+TEST(SpawnRobot, SpawnedMeshesBecomeHulls) {
+  auto sim = pendulums();
+  RobotSpawn p = panda();
+  p.base = RobotSpawn::Base::Fixed;
+  p.geometry.paths.package_path = {kRoot + "/data/meshes"};
+  WorldEditPtr edit = sim->prepare_spawn_robot(p);
+  sim->commit(std::move(edit));
+  int hulls = 0;
+  const std::vector<CollisionObject>& objects = *sim->contact_objects();
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const Shape& s = objects[i].shape;
+    if (objects[i].name.compare(0, 6, "panda/") == 0 && s.type == ShapeType::Mesh) {
+      EXPECT_TRUE(s.mesh && s.mesh->triangle_count() > 0) << objects[i].name;
+      ++hulls;
+    }
+  }
+  EXPECT_GE(hulls, 8);
+  ASSERT_EQ(sim->step_n(100), 100) << sim->failure();
+  // A mesh that cannot be found is refused with the link named, nothing changed.
+  RobotSpawn lost = panda("lost");
+  lost.geometry.paths.package_path.clear();
+  lost.geometry.paths.use_ros_package_path = false;
+  const auto r = refusal([&] { sim->prepare_spawn_robot(lost); });
+  EXPECT_EQ(r.first, WorldError::Kind::Resource) << r.second;
+  EXPECT_NE(r.second.find("link"), std::string::npos) << r.second;
 }
 
 int main(int argc, char** argv) {

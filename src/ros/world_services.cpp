@@ -26,6 +26,7 @@
 #include "se3_sim/model/limits.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
+#include "se3_sim/ros/renderer_convert.h"
 
 namespace se3_ros {
 
@@ -225,7 +226,7 @@ struct WorldServices::Impl {
       const auto slash = path.find_last_of('/');
       if (slash != std::string::npos) dir = path.substr(0, slash);
     }
-    if (yaml.find("<robot") != std::string::npos) return spawn_robot(req, res, yaml, source);
+    if (yaml.find("<robot") != std::string::npos) return spawn_robot(req, res, yaml, source, dir);
     if (!req.entity_namespace.empty()) {
       fail(res.result, Srv::NAMESPACE_INVALID,
            "entity_namespace: objects have no namespace (only a URDF robot takes one)");
@@ -307,7 +308,7 @@ struct WorldServices::Impl {
   // A URDF robot (spawn_entity with a <robot> resource): parsed and built off the simulator's
   // lock, its topics advertised off it too, both swapped in under it.
   bool spawn_robot(se3_sim::SpawnEntity::Request& req, se3_sim::SpawnEntity::Response& res,
-                   const std::string& urdf, const std::string& source) {
+                   const std::string& urdf, const std::string& source, const std::string& dir) {
     using Srv = se3_sim::SpawnEntity::Response;
     if (!hooks.robots) {
       fail(res.result, Srv::UNSUPPORTED_FORMAT,
@@ -318,6 +319,9 @@ struct WorldServices::Impl {
     spawn.urdf = urdf;
     spawn.name = req.name;
     spawn.ns = req.entity_namespace;
+    // Its collision meshes (a scene with collision) as the markers find them: package:// by
+    // rospack, relative names beside the URDF file (or the scene).
+    spawn.geometry.resolver = se3::ros_renderer::ros_resolver(dir);
     if (!all_zero(req.initial_pose.pose)) {
       const std::string why = from_pose(req.initial_pose.pose, spawn.pose);
       if (!why.empty()) {
@@ -349,7 +353,9 @@ struct WorldServices::Impl {
         const bool ns = why.compare(0, 10, "namespace ") == 0;
         switch (e.kind) {
           case Kind::Resource:
-            code = Srv::RESOURCE_PARSE_ERROR;
+            // A collision mesh that did not load (a scene with collision) is a missing asset.
+            code = why.find("contact needs it") != std::string::npos ? Srv::MISSING_ASSETS
+                                                                     : Srv::RESOURCE_PARSE_ERROR;
             why = "entity_resource (" + source + "): " + why;
             break;
           case Kind::NameInUse:

@@ -1,7 +1,10 @@
 // Several robots in one Simulator (sim.h, docs/multi_robot.md): robots 1.. beside robot 0, each
 // a system of its own with its state, stepper, commands, controllers and joint limits.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 
 #include "se3_sim/lie/format.h"
@@ -11,6 +14,8 @@
 namespace se3 {
 
 namespace {
+
+constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
 
 // A state of model m: sizes, finite, continuous joints wrapped.
 State checked_state(const Model& m, const State& s, const std::string& what) {
@@ -60,11 +65,18 @@ int Simulator::add_robot(const std::string& name, const std::string& ns, Model m
     throw std::invalid_argument("robot '" + name +
                                 "': add robots before set_scene_collision (it holds their shapes)");
   }
+  return insert_robot(make_extra_robot(name, ns, std::make_unique<Model>(std::move(model)), initial,
+                                       controllers, joint_limits));
+}
+
+std::unique_ptr<Simulator::ExtraRobot> Simulator::make_extra_robot(
+    const std::string& name, const std::string& ns, std::unique_ptr<Model> model,
+    const State& initial, const std::vector<ControllerSpec>& controllers, bool joint_limits) const {
   const std::string what = "robot '" + name + "'";
-  auto r = std::make_unique<ExtraRobot>(model);
+  auto r = std::make_unique<ExtraRobot>(*model);
   r->name = name;
   r->ns = ns;
-  r->model = std::make_unique<Model>(std::move(model));
+  r->model = std::move(model);
   const Model& m = *r->model;
   r->initial = checked_state(m, initial, what);
   r->stepper = make_stepper(config_.integrator, m, config_.stepper);
@@ -79,9 +91,14 @@ int Simulator::add_robot(const std::string& name, const std::string& ns, Model m
   }
   r->command = VecX::Zero(m.nv);
   r->actuation = VecX::Zero(m.nv);
+  r->command_until.assign(m.nv, kNever);
   if (!controllers.empty()) r->controllers = std::make_unique<ControllerSet>(m, controllers);
+  return r;
+}
+
+int Simulator::insert_robot(std::unique_ptr<ExtraRobot> r) {
   extra_states_.push_back(r->initial);
-  extra_a_.push_back(VecX::Zero(m.nv));
+  extra_a_.push_back(VecX::Zero(r->model->nv));
   extra_.push_back(std::move(r));
   reset_extra_robot(*extra_.back());  // the others run on (a robot spawned at run time)
   return robot_count() - 1;
@@ -120,7 +137,10 @@ double Simulator::set_robot_joint_effort(int k, int i, double effort) {
   if (!std::isfinite(effort)) throw std::invalid_argument("effort is not finite");
   const double lim = m.effort[i];
   if (std::isfinite(lim) && lim > 0) effort = std::min(lim, std::max(-lim, effort));
-  r.command[m.idx_v(i)] = effort;
+  const int iv = m.idx_v(i);
+  r.command[iv] = effort;
+  r.command_until[iv] = command_expiry();
+  r.next_expiry = std::min(r.next_expiry, r.command_until[iv]);
   return effort;
 }
 
@@ -128,7 +148,23 @@ void Simulator::set_robot_base_wrench(int k, const Vec6& wrench) {
   if (k == 0) return set_base_wrench(wrench);
   ExtraRobot& r = extra(k);
   if (!wrench.allFinite()) throw std::invalid_argument("base wrench is not finite");
-  if (r.model->floating) r.command.head<6>() = wrench;
+  if (!r.model->floating) return;
+  r.command.head<6>() = wrench;
+  const std::uint64_t until = command_expiry();
+  for (int k = 0; k < 6; ++k) r.command_until[k] = until;
+  r.next_expiry = std::min(r.next_expiry, until);
+}
+
+void Simulator::expire_commands(ExtraRobot& r) const {
+  if (steps_ < r.next_expiry) return;  // one comparison per step unless a command runs out now
+  r.next_expiry = kNever;
+  for (int k = 0; k < r.model->nv; ++k) {
+    if (steps_ >= r.command_until[k]) {
+      r.command[k] = 0;
+      r.command_until[k] = kNever;
+    }
+    r.next_expiry = std::min(r.next_expiry, r.command_until[k]);
+  }
 }
 
 const VecX& Simulator::robot_actuation(int k) const {
@@ -197,6 +233,7 @@ bool Simulator::coupled_robots() const {
 void Simulator::prepare_coupled_robots() {
   for (size_t k = 0; k < extra_.size(); ++k) {
     ExtraRobot& r = *extra_[k];
+    expire_commands(r);
     r.tau = &r.command;
     if (r.controllers) {
       r.actuation = r.command;
@@ -238,6 +275,7 @@ bool Simulator::step_extra_robots() {
   const double h = config_.dt;
   for (const auto& rp : extra_) {
     ExtraRobot& r = *rp;
+    expire_commands(r);
     const VecX* tau = &r.command;
     if (r.controllers) {
       r.actuation = r.command;
@@ -276,6 +314,8 @@ void Simulator::reset_extra_robot(ExtraRobot& r) {
   r.last_good = r.initial;
   r.command.setZero();
   r.actuation.setZero();
+  std::fill(r.command_until.begin(), r.command_until.end(), kNever);
+  r.next_expiry = kNever;
   if (r.constraints_start) r.constraints = std::make_unique<ConstraintSystem>(*r.constraints_start);
   if (r.controllers) r.controllers->reset(r.state);
   r.stepper->restart();

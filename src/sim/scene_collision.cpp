@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "object_parts.h"
+#include "robot_collision.h"
 #include "se3_sim/model/limits.h"
 
 namespace se3 {
@@ -70,6 +71,40 @@ void gazebo_surface(const GazeboTags& gz, const std::string& link, double dt, Co
 }
 
 }  // namespace
+
+void append_robot_collision(const Model& m, const GeometryModel& g, const GazeboTags& gz,
+                            const RobotCollisionSpec& spec, std::vector<CollisionObject>& objects,
+                            CollisionOptions& options) {
+  const std::string& name = spec.name;
+  for (const GeometryObject& go : g.collisions) {
+    if (go.body < 0 || go.body > m.n) continue;
+    if (go.shape.type == ShapeType::Mesh &&
+        (!go.shape.mesh || go.shape.mesh->triangle_count() == 0)) {
+      throw std::invalid_argument("robot '" + name + "': " +
+                                  (go.warning.empty() ? "link '" + go.link + "': collision mesh '" +
+                                                            go.shape.resource + "' has no triangles"
+                                                      : go.warning) +
+                                  "; contact needs it");
+    }
+    CollisionObject o;
+    o.name = name + "/" + go.name;
+    o.link = name + "/" + go.link;
+    o.frame = spec.first + go.body;
+    o.placement = go.placement;
+    o.shape = go.shape;
+    o.group = spec.group;
+    o.mu = spec.mu;
+    gazebo_surface(gz, go.link, spec.dt, o);
+    objects.push_back(o);
+  }
+  const int first = spec.first;
+  for (int i = 1; i <= m.n; ++i) options.adjacent.push_back({first + m.parent[i], first + i});
+  if (!m.floating) options.adjacent.push_back({first, CollisionObject::kWorld});
+  if (spec.self_collision) options.self_colliding_groups.push_back(spec.group);
+  for (const auto& p : spec.disabled_links) {
+    options.disabled_links.push_back({name + "/" + p.first, name + "/" + p.second});
+  }
+}
 
 GeometryModel scene_robot_geometry(const Scene& scene, const Model& model,
                                    const std::string& urdf_xml) {
@@ -188,61 +223,41 @@ SceneCollision scene_collision(const Scene& scene, const Model* model,
   for (std::size_t k = 0; k < robots.size(); ++k) {
     const Model& m = *robots[k];
     const Scene& e = scene.extra_robots[k];
-    const int first = next;
+    RobotCollisionSpec rc;
+    rc.name = !e.robot_name.empty() ? e.robot_name : m.name.empty() ? "robot" : m.name;
+    rc.first = next;
+    rc.group = 2 + static_cast<int>(k);
+    rc.self_collision = e.self_collision;
+    rc.mu = robot_mu;
+    rc.dt = scene.dt;
     next += m.n + 1;
-    const int group = 2 + static_cast<int>(k);
-    const std::string name = !e.robot_name.empty() ? e.robot_name
-                             : m.name.empty()      ? "robot"
-                                                   : m.name;
     GeometryOptions gopt;
     const std::string root = package_root(e.robot_path);
     if (!root.empty()) gopt.paths.package_path = {root + "/data/meshes"};
     const GeometryModel g = scene_geometry(e, m, "", gopt);
     warnings.insert(warnings.end(), g.warnings.begin(), g.warnings.end());
-    const GazeboTags gz = robot_gazebo_tags(e, m, "");
-    for (const GeometryObject& go : g.collisions) {
-      if (go.body < 0 || go.body > m.n) continue;
-      if (go.shape.type == ShapeType::Mesh &&
-          (!go.shape.mesh || go.shape.mesh->triangle_count() == 0)) {
-        throw SceneError(scene_name(scene) + ": robot '" + name + "': " +
-                         (go.warning.empty() ? "link '" + go.link + "': collision mesh '" +
-                                                   go.shape.resource + "' has no triangles"
-                                             : go.warning) +
-                         "; contact needs it");
-      }
-      CollisionObject o;
-      o.name = name + "/" + go.name;
-      o.link = name + "/" + go.link;
-      o.frame = first + go.body;
-      o.placement = go.placement;
-      o.shape = go.shape;
-      o.group = group;
-      o.mu = robot_mu;
-      gazebo_surface(gz, go.link, scene.dt, o);
-      objs.push_back(o);
-      scene_object.push_back(-1);
-      body.push_back(-1);
-    }
-    for (int i = 1; i <= m.n; ++i) opt.adjacent.push_back({first + m.parent[i], first + i});
-    if (!m.floating) opt.adjacent.push_back({first, CollisionObject::kWorld});
-    if (e.self_collision) opt.self_colliding_groups.push_back(group);
     if (!e.srdf.empty()) {
-      std::vector<std::pair<std::string, std::string>> pairs;
       try {
-        pairs = srdf_disabled_pairs(read_text(e.srdf, scene));
+        rc.disabled_links = srdf_disabled_pairs(read_text(e.srdf, scene));
       } catch (const std::invalid_argument& err) {
         throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "': " + err.what());
       }
-      for (const auto& p : pairs) {
+      for (const auto& p : rc.disabled_links) {
         for (const std::string* l : {&p.first, &p.second}) {
           if (m.link_index(*l) < 0) {
             throw SceneError(scene_name(scene) + ": srdf '" + e.srdf + "' names link '" + *l +
-                             "', which robot '" + name + "' lacks");
+                             "', which robot '" + rc.name + "' lacks");
           }
         }
-        opt.disabled_links.push_back({name + "/" + p.first, name + "/" + p.second});
       }
     }
+    try {
+      append_robot_collision(m, g, robot_gazebo_tags(e, m, ""), rc, objs, opt);
+    } catch (const std::invalid_argument& err) {
+      throw SceneError(scene_name(scene) + ": " + err.what());
+    }
+    scene_object.resize(objs.size(), -1);
+    body.resize(objs.size(), -1);
   }
   sc.robot_frames = next - robot_bodies - sc.free_objects;
   if (scene.constraints.ground) {

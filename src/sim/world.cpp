@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "object_parts.h"
+#include "robot_collision.h"
 #include "scene_objects_reader.h"
 #include "se3_sim/constraint/constraint.h"
 #include "se3_sim/sim/scene_collision.h"
@@ -90,13 +91,11 @@ struct WorldEdit {
   std::unique_ptr<CollisionModel> collision;
   std::unique_ptr<SceneCollision> scene_collision;
   std::unique_ptr<ConstraintSystem> constraints, constraints_start;
-  // A robot edit (the objects untouched): the spawned robot's model and state (robot_model set),
-  // or the deleted robot (deleted its name).
+  // A robot edit (the objects untouched): the spawned robot, built (extra set), or the deleted
+  // robot (deleted its name). In a scene with collision, scene_collision and constraints are the
+  // world with it or without it.
   bool robot = false;
-  std::unique_ptr<Model> robot_model;
-  State robot_initial;
-  std::string robot_ns;
-  bool joint_limits = true;
+  std::unique_ptr<Simulator::ExtraRobot> extra;
 };
 
 WorldEditInfo edit_info(const WorldEditPtr& edit) {
@@ -105,7 +104,7 @@ WorldEditInfo edit_info(const WorldEditPtr& edit) {
   i.spawned = edit->spawned;
   i.deleted = edit->deleted;
   i.robot = edit->robot;
-  i.robot_model = edit->robot_model.get();
+  i.robot_model = edit->extra ? edit->extra->model.get() : nullptr;
   return i;
 }
 
@@ -193,18 +192,11 @@ WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
     throw WorldError(WorldError::Kind::Invalid,
                      "name '" + name + "' is the simulator's first robot, which cannot be deleted");
   } else if (k > 0) {
-    // Its shapes are in the scene collision with frames of their own (the later robots' frames
-    // would move down): not yet.
-    if (coupled_robots()) {
-      throw WorldError(WorldError::Kind::Invalid,
-                       "robot '" + name +
-                           "' cannot be deleted yet in a scene whose robots touch each other "
-                           "(docs/multi_robot.md)");
-    }
     WorldEditPtr e(new WorldEdit);
     e->generation = world_generation_;
     e->robot = true;
     e->deleted = name;
+    if (coupled_robots()) without_robot_collision(k, *e);
     return e;
   }
   const int j = object_index(name);
@@ -217,21 +209,20 @@ WorldEditPtr Simulator::prepare_delete(const std::string& name) const {
 }
 
 WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
-  if (coupled_robots()) {
-    throw WorldError(WorldError::Kind::Invalid,
-                     "objects cannot be spawned, deleted or moved yet in a scene whose robots "
-                     "touch each other (docs/multi_robot.md)");
-  }
   WorldEditPtr e(new WorldEdit);
   e->generation = world_generation_;
   const int first_frame = model_->n + 1;
   std::vector<CollisionObject> colliders;
   std::vector<int> scene_object, body, object_frame;
-  // The robot's own collision objects stay as they are (their frames do not change).
+  // The robots' collision objects stay as they are; those of robots 1.. (frames after the free
+  // objects') move with the free objects' count.
+  const int robots_from = first_frame + static_cast<int>(bodies_.size());
+  std::vector<size_t> robot_objects;
   if (scene_collision_) {
     const std::vector<CollisionObject>& old = scene_collision_->model.objects();
     for (size_t k = 0; k < old.size(); ++k) {
       if (scene_collision_->scene_object[k] >= 0 || int(k) == scene_collision_->ground) continue;
+      if (old[k].frame >= robots_from) robot_objects.push_back(colliders.size());
       colliders.push_back(old[k]);
       scene_object.push_back(-1);
       body.push_back(scene_collision_->body[k]);
@@ -295,12 +286,19 @@ WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
     colliders.push_back(g);
   }
   const int nb = static_cast<int>(e->bodies.size());
+  const int shift = nb - static_cast<int>(bodies_.size());
+  for (const size_t k : robot_objects) colliders[k].frame += shift;
   try {
     if (scene_collision_) {
+      CollisionOptions opt = scene_collision_->model.options();
+      for (FramePair& p : opt.adjacent) {
+        if (p.a >= robots_from) p.a += shift;
+        if (p.b >= robots_from) p.b += shift;
+      }
       e->scene_collision = std::make_unique<SceneCollision>(
-          SceneCollision{CollisionModel(std::move(colliders), scene_collision_->model.options()),
-                         first_frame, nb, std::move(object_frame), std::move(scene_object),
-                         std::move(body), ground, scene_collision_->warnings});
+          SceneCollision{CollisionModel(std::move(colliders), std::move(opt)), first_frame, nb,
+                         std::move(object_frame), std::move(scene_object), std::move(body), ground,
+                         scene_collision_->warnings, scene_collision_->robot_frames});
     } else if (nb > 0) {
       CollisionOptions copt;
       copt.margin = spec_.options.margin;
@@ -311,7 +309,18 @@ WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
   }
   // The constraint system for the new set of free bodies (rebuild_constraints without the
   // projection: the initial state was projected when the constraints were set).
-  if (!(spec_.empty() && nb == 0 && !scene_collision_)) {
+  if (scene_collision_) {
+    std::vector<const Model*> robots;
+    std::vector<bool> limits;
+    if (coupled_robots()) {
+      robots = extra_robot_models();
+      for (const auto& r : extra_) {
+        limits.push_back(r->constraints && r->constraints->spec().joint_limits);
+      }
+    }
+    e->constraints = coupled_constraints(e->body_models, robots, limits);
+    e->constraints_start = std::make_unique<ConstraintSystem>(*e->constraints);
+  } else if (!(spec_.empty() && nb == 0)) {
     e->constraints = std::make_unique<ConstraintSystem>(*model_, spec_);
     if (nb > 0 || scene_collision_) {
       e->constraints->set_free_bodies(e->body_models, (scene_collision_ ? 64 : 0) + 16 * nb);
@@ -366,9 +375,10 @@ std::string Simulator::commit(WorldEditPtr e) {
   }
   constraints_ = std::move(e->constraints);
   constraints_start_ = std::move(e->constraints_start);
-  frame_poses_.assign(model_->n + 1 + nb, SE3());
+  const int robot_frames = scene_collision_ ? scene_collision_->robot_frames : 0;
+  frame_poses_.assign(model_->n + 1 + nb + robot_frames, SE3());
   free_poses_.assign(nb, SE3());
-  collision_data_.contacts.reserve((scene_collision_ ? 256 : 0) + 64 * nb);
+  collision_data_.contacts.reserve((scene_collision_ ? 256 : 0) + 64 * (nb + extra_.size()));
   contacts_fresh_ = false;
   ++world_generation_;
   if (!e->spawned.empty()) ++spawned_;
@@ -611,8 +621,9 @@ WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   using K = WorldError::Kind;
   if (sp.urdf.empty()) throw WorldError(K::Resource, "urdf is empty");
   Model m;
+  UrdfDocument doc;
   try {
-    const UrdfDocument doc = parse_urdf_document(sp.urdf);
+    doc = parse_urdf_document(sp.urdf);
     UrdfOptions opt;
     opt.floating = sp.base == RobotSpawn::Base::Free ||
                    (sp.base == RobotSpawn::Base::FromUrdf && doc.gazebo.is_static != 1);
@@ -651,12 +662,12 @@ WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   }
   const std::string what = "robot '" + name + "'";
   check_pose(sp.pose, what);
-  // After the request's own checks. The scene collision holds every robot's shapes with frames of
-  // their own: a robot joins it only when the simulator is built (docs/multi_robot.md).
-  if (scene_collision_) {
+  // A scene collision that left its robots 1.. out (set_scene_collision without them) has no
+  // frames for another.
+  if (scene_collision_ && !extra_.empty() && !coupled_robots()) {
     throw WorldError(K::Invalid,
-                     "robots cannot be spawned yet into a scene with collision (objects, "
-                     "self-collision or contacts from collisions: docs/multi_robot.md)");
+                     "robots cannot be spawned into a scene collision that holds no robot after "
+                     "the first (docs/multi_robot.md)");
   }
   State x(m);
   x.base = sp.pose;
@@ -667,11 +678,198 @@ WorldEditPtr Simulator::prepare_spawn_robot(const RobotSpawn& sp) const {
   e->generation = world_generation_;
   e->robot = true;
   e->spawned = name;
-  e->robot_ns = bare(sp.ns);
-  e->joint_limits = sp.joint_limits;
-  e->robot_initial = std::move(x);
-  e->robot_model = std::make_unique<Model>(std::move(m));
+  try {
+    e->extra = make_extra_robot(name, bare(sp.ns), std::make_unique<Model>(std::move(m)), x, {},
+                                sp.joint_limits);
+  } catch (const std::exception& err) {
+    throw WorldError(K::Invalid, what + ": " + err.what());
+  }
+  if (scene_collision_) {
+    // Its shapes, meshes loaded and their hulls built, here and not in the step.
+    const Model& model = *e->extra->model;
+    const GeometryModel g = geometry_from_urdf(model, doc, sp.geometry);
+    with_robot_collision(sp, g, doc.gazebo, *e);
+  }
   return e;
+}
+
+void Simulator::with_robot_collision(const RobotSpawn& sp, const GeometryModel& g,
+                                     const GazeboTags& gz, WorldEdit& e) const {
+  using K = WorldError::Kind;
+  const Model& m = *e.extra->model;
+  const SceneCollision& old = *scene_collision_;
+  RobotCollisionSpec rc;
+  rc.name = e.spawned;
+  rc.first = old.robot_bodies + old.free_objects + old.robot_frames;
+  // A group no other robot has (deletes leave gaps: groups need only differ).
+  int group = 1;
+  for (const CollisionObject& o : old.model.objects()) group = std::max(group, o.group);
+  for (const int gr : old.model.options().self_colliding_groups) group = std::max(group, gr);
+  rc.group = group + 1;
+  rc.self_collision = sp.self_collision;
+  rc.mu = spec_.mu;
+  rc.dt = config_.dt;
+  if (!sp.srdf.empty()) {
+    try {
+      rc.disabled_links = srdf_disabled_pairs(sp.srdf);
+    } catch (const std::invalid_argument& err) {
+      throw WorldError(K::Resource, std::string("srdf: ") + err.what());
+    }
+    for (const auto& p : rc.disabled_links) {
+      for (const std::string* l : {&p.first, &p.second}) {
+        if (m.link_index(*l) < 0) {
+          throw WorldError(K::Invalid,
+                           "srdf names link '" + *l + "', which robot '" + e.spawned + "' lacks");
+        }
+      }
+    }
+  }
+  // The old objects, the robot's after them, the ground last (as scene_collision orders them).
+  std::vector<CollisionObject> objects;
+  std::vector<int> scene_object, body;
+  for (size_t i = 0; i < old.model.objects().size(); ++i) {
+    if (static_cast<int>(i) == old.ground) continue;
+    objects.push_back(old.model.objects()[i]);
+    scene_object.push_back(old.scene_object[i]);
+    body.push_back(old.body[i]);
+  }
+  CollisionOptions opt = old.model.options();
+  try {
+    append_robot_collision(m, g, gz, rc, objects, opt);
+  } catch (const std::invalid_argument& err) {
+    throw WorldError(K::Resource, err.what());
+  }
+  scene_object.resize(objects.size(), -1);
+  body.resize(objects.size(), -1);
+  int ground = -1;
+  if (old.ground >= 0) {
+    ground = static_cast<int>(objects.size());
+    objects.push_back(old.model.objects()[old.ground]);
+    scene_object.push_back(-1);
+    body.push_back(-1);
+  }
+  auto sc = std::make_unique<SceneCollision>(SceneCollision{CollisionModel({}, {}),
+                                                            old.robot_bodies,
+                                                            old.free_objects,
+                                                            old.object_frame,
+                                                            {},
+                                                            {},
+                                                            ground,
+                                                            old.warnings,
+                                                            old.robot_frames + m.n + 1});
+  sc->warnings.insert(sc->warnings.end(), g.warnings.begin(), g.warnings.end());
+  try {
+    sc->model = CollisionModel(std::move(objects), std::move(opt));
+  } catch (const std::invalid_argument& err) {
+    throw WorldError(K::Resource, "robot '" + e.spawned + "': " + err.what());
+  }
+  sc->scene_object = std::move(scene_object);
+  sc->body = std::move(body);
+  e.scene_collision = std::move(sc);
+  std::vector<const Model*> robots = extra_robot_models();
+  std::vector<bool> limits;
+  for (const auto& r : extra_)
+    limits.push_back(r->constraints && r->constraints->spec().joint_limits);
+  robots.push_back(&m);
+  limits.push_back(sp.joint_limits);
+  e.constraints = coupled_constraints(body_models_, robots, limits);
+  e.constraints_start = std::make_unique<ConstraintSystem>(*e.constraints);
+}
+
+void Simulator::without_robot_collision(int k, WorldEdit& e) const {
+  const SceneCollision& old = *scene_collision_;
+  int first = old.robot_bodies + old.free_objects;
+  for (int j = 1; j < k; ++j) first += extra(j).model->n + 1;
+  const int count = extra(k).model->n + 1;
+  const int end = first + count;
+  auto moved = [&](int f) { return f >= end ? f - count : f; };
+  auto gone = [&](int f) { return f >= first && f < end; };
+  std::vector<CollisionObject> objects;
+  std::vector<int> scene_object, body, groups;
+  int ground = -1;
+  for (size_t i = 0; i < old.model.objects().size(); ++i) {
+    CollisionObject o = old.model.objects()[i];
+    if (gone(o.frame)) {
+      groups.push_back(o.group);
+      continue;
+    }
+    o.frame = moved(o.frame);
+    if (static_cast<int>(i) == old.ground) ground = static_cast<int>(objects.size());
+    objects.push_back(std::move(o));
+    scene_object.push_back(old.scene_object[i]);
+    body.push_back(old.body[i]);
+  }
+  CollisionOptions opt = old.model.options();
+  std::vector<FramePair> adjacent;
+  for (const FramePair& p : opt.adjacent) {
+    if (!gone(p.a) && !gone(p.b)) adjacent.push_back({moved(p.a), moved(p.b)});
+  }
+  opt.adjacent = std::move(adjacent);
+  auto in = [](const std::vector<int>& v, int x) {
+    return std::find(v.begin(), v.end(), x) != v.end();
+  };
+  std::vector<int> self;
+  for (const int gr : opt.self_colliding_groups) {
+    if (!in(groups, gr)) self.push_back(gr);
+  }
+  opt.self_colliding_groups = std::move(self);
+  const std::string prefix = extra(k).name + "/";
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const auto& p : opt.disabled_links) {
+    if (p.first.compare(0, prefix.size(), prefix) != 0) pairs.push_back(p);
+  }
+  opt.disabled_links = std::move(pairs);
+  auto sc = std::make_unique<SceneCollision>(SceneCollision{CollisionModel({}, {}),
+                                                            old.robot_bodies,
+                                                            old.free_objects,
+                                                            old.object_frame,
+                                                            {},
+                                                            {},
+                                                            ground,
+                                                            old.warnings,
+                                                            old.robot_frames - count});
+  try {
+    sc->model = CollisionModel(std::move(objects), std::move(opt));
+  } catch (const std::invalid_argument& err) {
+    throw WorldError(WorldError::Kind::Invalid, err.what());
+  }
+  sc->scene_object = std::move(scene_object);
+  sc->body = std::move(body);
+  e.scene_collision = std::move(sc);
+  std::vector<const Model*> robots;
+  std::vector<bool> limits;
+  for (size_t j = 0; j < extra_.size(); ++j) {
+    if (static_cast<int>(j) + 1 == k) continue;
+    robots.push_back(extra_[j]->model.get());
+    limits.push_back(extra_[j]->constraints && extra_[j]->constraints->spec().joint_limits);
+  }
+  e.constraints = coupled_constraints(body_models_, robots, limits);
+  e.constraints_start = std::make_unique<ConstraintSystem>(*e.constraints);
+}
+
+std::unique_ptr<ConstraintSystem> Simulator::coupled_constraints(
+    const std::vector<const Model*>& bodies, const std::vector<const Model*>& robots,
+    const std::vector<bool>& limits) const {
+  // As rebuild_constraints builds it (the initial state was projected when it ran).
+  ConstraintSpec spec = spec_;
+  if (config_.mimic_joints && !model_->mimics.empty()) {
+    const std::vector<BilateralConstraint> mimics = mimic_constraints(*model_);
+    spec.bilateral.insert(spec.bilateral.end(), mimics.begin(), mimics.end());
+  }
+  auto c = std::make_unique<ConstraintSystem>(*model_, spec);
+  c->set_free_bodies(bodies, 64 + static_cast<int>(16 * (bodies.size() + robots.size())), robots,
+                     limits);
+  c->anchor(initial_);
+  return c;
+}
+
+void Simulator::swap_robot_collision(WorldEdit& e) {
+  if (!e.scene_collision) return;
+  scene_collision_ = std::move(e.scene_collision);
+  constraints_ = std::move(e.constraints);
+  constraints_start_ = std::move(e.constraints_start);
+  frame_poses_.assign(model_->n + 1 + bodies_.size() + scene_collision_->robot_frames, SE3());
+  collision_data_.contacts.reserve(256 + 64 * (bodies_.size() + extra_.size()));
 }
 
 std::string Simulator::spawn_robot(const RobotSpawn& spawn) {
@@ -683,10 +881,9 @@ std::string Simulator::spawn_robot(const RobotSpawn& spawn) {
 
 std::string Simulator::commit_robot(WorldEdit& e) {
   if (!e.spawned.empty()) {
-    if (!e.robot_model) throw WorldError(WorldError::Kind::Invalid, "the edit was committed");
-    add_robot(e.spawned, e.robot_ns, std::move(*e.robot_model), e.robot_initial, {},
-              e.joint_limits);
-    e.robot_model.reset();
+    if (!e.extra) throw WorldError(WorldError::Kind::Invalid, "the edit was committed");
+    insert_robot(std::move(e.extra));
+    swap_robot_collision(e);
     ++spawned_;
   } else {
     const int k = robot_index(e.deleted);
@@ -694,6 +891,7 @@ std::string Simulator::commit_robot(WorldEdit& e) {
       throw WorldError(WorldError::Kind::NotFound, "name '" + e.deleted + "': no such robot");
     }
     remove_robot(k);
+    swap_robot_collision(e);
     ++deleted_;
   }
   ++world_generation_;

@@ -111,7 +111,7 @@ struct Scene {
   std::vector<SensorSpec> sensors;
   /// `robots:` (docs/multi_robot.md): a list of robots, each a map of name, urdf, namespace,
   /// base, base_pose, base_twist, initial_positions, initial_velocities, locked_joints,
-  /// controllers, srdf, self_collision, joint_limits. The first is the scene's robot (its
+  /// controllers, srdf, self_collision, joint_limits, sensors. The first is the scene's robot (its
   /// keys land in the fields above, as `robot:` would set them); the others are in
   /// extra_robots, each a Scene with only those keys set. Not with `robot:`.
   std::string robot_name;       ///< a `robots:` entry's name ("": the model's name)
@@ -406,12 +406,15 @@ class Simulator {
   /// the step; the commit adds it through add_robot (it steps from the next step on). Throws
   /// WorldError (nothing changed), one line naming the field: `urdf` malformed or not a robot
   /// the dynamics take (Kind::Resource), `name` in use or not a frame name, `namespace` in use
-  /// or not a ROS name, `pose` not finite, not a rotation or absurd.
+  /// or not a ROS name, `pose` not finite, not a rotation or absurd. With a scene collision the
+  /// robot's collision shapes (meshes and hulls) and the new collision model and constraint
+  /// system are built here too (a mesh that does not load: Kind::Resource naming the link).
   WorldEditPtr prepare_spawn_robot(const RobotSpawn& spawn) const;
   /// prepare_spawn_robot and commit; returns the robot's name.
   std::string spawn_robot(const RobotSpawn& spawn);
   /// Throws std::invalid_argument for an unknown model and for robot 0 (not deletable); robots
-  /// 1.. are deleted (the later ones move down one index).
+  /// 1.. are deleted (the later ones move down one index; with a scene collision their shapes
+  /// leave it and the later robots' frames move down).
   WorldEditPtr prepare_delete(const std::string& name) const;
   /// Applies a prepared edit: the objects kept keep their states, a spawned one starts at its
   /// pose and twist at the next step, time runs on. Throws std::invalid_argument (nothing
@@ -573,6 +576,10 @@ class Simulator {
     State initial, state, last_good;
     VecX command, actuation;
     const VecX* tau = &command;  ///< this step's generalized force (command or actuation)
+    /// Per velocity coordinate: the step count from which its command no longer acts (the
+    /// simulator's command_timeout, as robot 0's), and the least of them.
+    std::vector<std::uint64_t> command_until;
+    std::uint64_t next_expiry = std::numeric_limits<std::uint64_t>::max();
     Data diag;
     explicit ExtraRobot(const Model& m) : diag(m) {}
   };
@@ -586,6 +593,29 @@ class Simulator {
   void remove_robot(int k);
   /// commit() of a robot spawn or delete (src/sim/world.cpp).
   std::string commit_robot(WorldEdit& e);
+  /// A robot 1.. built for add_robot or a spawn (its name checked by the caller): its stepper,
+  /// its joint-limit and mimic constraints, its controllers. Touches nothing of the simulator.
+  std::unique_ptr<ExtraRobot> make_extra_robot(const std::string& name, const std::string& ns,
+                                               std::unique_ptr<Model> model, const State& initial,
+                                               const std::vector<ControllerSpec>& controllers,
+                                               bool joint_limits) const;
+  /// A robot edit's new scene collision and constraint system: with the spawned robot e.extra
+  /// (geometry g, meshes loaded, and Gazebo tags gz), or without robot k (src/sim/world.cpp).
+  void with_robot_collision(const RobotSpawn& spawn, const GeometryModel& g, const GazeboTags& gz,
+                            WorldEdit& e) const;
+  void without_robot_collision(int k, WorldEdit& e) const;
+  /// Swaps in a robot edit's scene collision and constraint system (when it has them).
+  void swap_robot_collision(WorldEdit& e);
+  /// Appends a robot built by make_extra_robot, at its initial state; returns its index.
+  int insert_robot(std::unique_ptr<ExtraRobot> r);
+  /// Robot 0's constraint system with the free objects `bodies` and `robots` (robots 1.., their
+  /// joint limits as rows where `limits` says) in its contact step: rebuild_constraints' system
+  /// for a world edit in a scene collision, anchored at the initial state (src/sim/world.cpp).
+  std::unique_ptr<ConstraintSystem> coupled_constraints(const std::vector<const Model*>& bodies,
+                                                        const std::vector<const Model*>& robots,
+                                                        const std::vector<bool>& limits) const;
+  /// Zeroes robot r's commands that ran out (command_timeout) before a step.
+  void expire_commands(ExtraRobot& r) const;
   /// Rolls robots 1.. back to their last good states.
   void roll_back_extra_robots();
   ExtraRobot& extra(int k) const;

@@ -72,6 +72,13 @@ struct RobotSpawn {
   SE3 pose;          ///< the base's pose in the world
   Base base = Base::FromUrdf;
   bool joint_limits = true;  ///< the joint-limit constraints, as a scene's robots have them
+  /// In a scene with collision (the robot's <collision> shapes join it, meshes as convex
+  /// hulls): how its mesh names resolve (GeometryOptions::paths or resolver; relative names
+  /// against paths.base_dir), its links colliding with each other (a scene's self_collision)
+  /// and the SRDF text whose <disable_collisions> pairs never collide ("": none).
+  GeometryOptions geometry;
+  bool self_collision = false;
+  std::string srdf;
 };
 
 /// What a prepared edit does: the model it adds or removes ("" if none), whether that is a
