@@ -560,6 +560,63 @@ TEST(Sensors, UrdfCameraDepthAndLaserTags) {
   EXPECT_NE(warnings[0].find("range max"), std::string::npos) << warnings[0];
 }
 
+// A robot after the first carries its own sensors (a robots: entry's sensors:): robot b, resting
+// on the block, feels the block on its three links with its weight in all and its IMU reads +g;
+// robot a, on the ground, feels the ground only, not b's contacts.
+TEST(Sensors, RobotsAfterTheFirstCarryTheirOwnSensors) {
+  const std::string sensors =
+      " sensors: [{name: S_base, type: contact, link: base_link},"
+      " {name: S_l1, type: contact, link: link1}, {name: S_l2, type: contact, link: link2},"
+      " {name: S_imu, type: imu, link: base_link}],";
+  auto robot = [&](const std::string& name, double x, double z) {
+    std::string s = sensors;
+    for (size_t p; (p = s.find("S_")) != std::string::npos;) s.replace(p, 1, name);
+    return "  - {name: " + name + ", urdf: data/robots/double_pendulum_simple.urdf," + s +
+           " base: free, locked_joints: {joint1: 1.5708, joint2: 0}, base_pose: {position: [" +
+           std::to_string(x) + ", 0, " + std::to_string(z) + "]}}\n";
+  };
+  const std::string text =
+      "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
+      "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
+      "robots:\n" +
+      robot("a", 0, 0.1) + robot("b", 2, 0.3);
+  const Scene scene = parse_scene(text, kScenes, "two.yaml");
+  ASSERT_EQ(scene.extra_robots.size(), 1u);
+  ASSERT_EQ(scene.sensors.size(), 4u);  // robots[0]'s are the scene's (robot 0's)
+  ASSERT_EQ(scene.extra_robots[0].sensors.size(), 4u);
+  auto sim = make_simulator(scene);
+  SensorSet sa(sim->robot_model(0), scene.sensors);
+  SensorSet sb(sim->robot_model(1), scene.extra_robots[0].sensors, "", "b");
+  const double g = 9.81;
+  Vec3 fa = Vec3::Zero(), fb = Vec3::Zero();
+  for (int k = 0; k < 1500; ++k) {
+    sa.before_step(*sim);
+    sb.before_step(*sim);
+    const bool ok = sim->step();
+    sa.after_step(*sim, ok);
+    sb.after_step(*sim, ok);
+    ASSERT_TRUE(ok) << sim->failure();
+  }
+  for (int i = 0; i < 3; ++i) {
+    fa += sa.reading(i).total_force;
+    fb += sb.reading(i).total_force;
+    for (int t = 0; t < sa.reading(i).count; ++t) {
+      EXPECT_EQ(sa.reading(i).touches[t].other, "ground");
+    }
+    for (int t = 0; t < sb.reading(i).count; ++t) {
+      EXPECT_EQ(sb.reading(i).touches[t].other, "block");
+      EXPECT_EQ(sb.reading(i).touches[t].self.compare(0, 2, "b/"), 0);
+    }
+  }
+  const double weight = sim->robot_model(1).total_mass() * g;
+  EXPECT_GT(sb.reading(0).count, 0);
+  EXPECT_NEAR(fb.z(), weight, 0.05 * weight);
+  EXPECT_NEAR(fa.z(), weight, 0.05 * weight);
+  const SE3& base = sim->robot_state(1).base;
+  const Vec3 up = base.R.transpose() * Vec3(0, 0, g);
+  EXPECT_LT((sb.reading(3).linear_acceleration - up).norm(), 0.05 * g);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -13,6 +13,8 @@
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/model/limits.h"
 #include "se3_sim/ros/convert.h"
+#include "se3_sim/ros/params.h"
+#include "se3_sim/ros/robot_sensors.h"
 
 namespace se3_ros {
 
@@ -36,6 +38,7 @@ struct RobotInterfaces::Robot {
   se3::VecX effort;
   std::vector<se3::SE3> links;
   std::vector<geometry_msgs::TransformStamped> tfs;
+  std::unique_ptr<RobotSensors> sensors;  ///< null without sensors
 };
 
 std::string robot_ros_namespace(const se3::Simulator& sim, int k) {
@@ -58,6 +61,7 @@ RobotInterfaces::RobotInterfaces(ros::NodeHandle nh, const se3::Simulator& sim,
       max_effort_(max_effort),
       max_wrench_(max_wrench),
       with_sim_(std::move(with_sim)) {
+  use_sim_time_ = get_bool(nh, "/use_sim_time").value_or(false);
   for (int k = 1; k < sim.robot_count(); ++k) {
     RobotPtr r(new Robot);
     Robot& R = *r;
@@ -68,16 +72,24 @@ RobotInterfaces::RobotInterfaces(ros::NodeHandle nh, const se3::Simulator& sim,
     const se3::Scene* entry =
         k - 1 < static_cast<int>(scene.extra_robots.size()) ? &scene.extra_robots[k - 1] : nullptr;
     R.rnh = ros::NodeHandle(nh, R.ns);
+    std::string text;
     if (entry && !entry->robot_path.empty()) {
-      std::string text, why;
+      std::string why;
       if (!se3::read_file(entry->robot_path, text, &why)) {
         throw std::runtime_error("robot '" + sim.robot_name(k) + "': cannot read " +
                                  entry->robot_path + ": " + why);
       }
       R.rnh.setParam("robot_description", text);
     }
+    // Its robots: entry's sensors, then its URDF's Gazebo tags (as robot 0's: scene_sensors).
+    std::vector<std::string> warnings;
+    const std::vector<se3::SensorSpec> sensors =
+        entry ? se3::scene_sensors(*entry, text, &warnings) : std::vector<se3::SensorSpec>{};
+    for (const std::string& w : warnings) {
+      ROS_WARN("simulator: robot %s: %s", R.name.c_str(), w.c_str());
+    }
     connect(R, entry ? entry->locked_joints : std::vector<std::pair<std::string, double>>{},
-            entry ? entry->controllers : std::vector<se3::ControllerSpec>{});
+            entry ? entry->controllers : std::vector<se3::ControllerSpec>{}, sensors, text);
     robots_.push_back(std::move(r));
   }
 }
@@ -97,7 +109,11 @@ RobotInterfaces::RobotPtr RobotInterfaces::prepare(const se3::Model& model, cons
   R.spawned = true;
   R.rnh = ros::NodeHandle(nh_, R.ns);  // throws ros::InvalidNameException
   R.rnh.setParam("robot_description", urdf);
-  connect(R, {}, {});
+  std::vector<std::string> warnings;
+  const std::vector<se3::SensorSpec> sensors = se3::sensors_from_urdf(urdf, &warnings);
+  for (const std::string& w : warnings)
+    ROS_WARN("simulator: robot %s: %s", name.c_str(), w.c_str());
+  connect(R, {}, {}, sensors, urdf);
   return r;
 }
 
@@ -127,8 +143,19 @@ void RobotInterfaces::discard(RobotPtr r) {
 }
 
 void RobotInterfaces::connect(Robot& R, const std::vector<std::pair<std::string, double>>& locked,
-                              const std::vector<se3::ControllerSpec>& specs) {
+                              const std::vector<se3::ControllerSpec>& specs,
+                              const std::vector<se3::SensorSpec>& sensors,
+                              const std::string& urdf) {
   ros::NodeHandle& rnh = R.rnh;
+  if (!sensors.empty()) {
+    try {
+      R.sensors = std::make_unique<RobotSensors>(rnh, *R.model, sensors, urdf, R.name, R.ns,
+                                                 world_frame_, use_sim_time_);
+    } catch (const se3::SensorError& e) {
+      if (!R.spawned) throw std::runtime_error("robot '" + R.name + "': " + e.what());
+      ROS_WARN("simulator: robot %s: %s; its sensors are left out", R.name.c_str(), e.what());
+    }
+  }
   R.tf_model = prefixed_links(*R.model, R.ns);
   R.joints = joint_table(*R.model, locked);
   R.tree = tf_tree(R.tf_model, world_frame_);
@@ -226,8 +253,31 @@ std::vector<geometry_msgs::TransformStamped> RobotInterfaces::static_transforms(
   for (const auto& r : robots_) {
     const auto t = tf_static_transforms(r->tf_model, r->tree, stamp);
     out.insert(out.end(), t.begin(), t.end());
+    if (!r->sensors) continue;
+    for (geometry_msgs::TransformStamped s : r->sensors->static_transforms()) {
+      s.header.stamp = stamp;
+      out.push_back(s);
+    }
   }
   return out;
+}
+
+void RobotInterfaces::before_step(const se3::Simulator& sim) {
+  for (const auto& r : robots_) {
+    if (r->k >= 1 && r->sensors) r->sensors->before_step(sim);
+  }
+}
+
+void RobotInterfaces::after_step(const se3::Simulator& sim, bool ok) {
+  for (const auto& r : robots_) {
+    if (r->k >= 1 && r->sensors) r->sensors->after_step(sim, ok);
+  }
+}
+
+void RobotInterfaces::reset_sensors() {
+  for (const auto& r : robots_) {
+    if (r->sensors) r->sensors->reset();
+  }
 }
 
 void RobotInterfaces::publish(se3::Simulator& sim, const ros::Time& stamp,

@@ -664,6 +664,7 @@ void SimulatorNodeImpl::setup_world_services() {
   h.after_reset = [this](bool) {
     if (request_.active) end_step_request(false, "interrupted by simulator/reset_simulation");
     if (sensors_) sensors_->reset();
+    if (robots_) robots_->reset_sensors();
     if (rendered_) rendered_->reset();
     status_.clear();
     anchor_ = Clock::now();
@@ -746,8 +747,10 @@ void SimulatorNodeImpl::run() {
 bool SimulatorNodeImpl::physics_step() {
   const Clock::time_point t0 = Clock::now();
   if (sensors_) sensors_->before_step(*sim_);
+  if (robots_) robots_->before_step(*sim_);
   const bool ok = sim_->step();
   if (sensors_) sensors_->after_step(*sim_, ok);
+  if (robots_) robots_->after_step(*sim_, ok);
   step_wall_ += Clock::now() - t0;
   if (sensors_) publish_sensors();
   if (rendered_ && ok) rendered_->after_step(*sim_);
@@ -898,6 +901,7 @@ bool SimulatorNodeImpl::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger:
   if (request_.active) end_step_request(false, "interrupted by simulator/reset");
   sim_->reset();
   if (sensors_) sensors_->reset();
+  if (robots_) robots_->reset_sensors();
   if (rendered_) rendered_->reset();
   status_.clear();
   anchor_ = Clock::now();

@@ -238,14 +238,16 @@ const std::vector<std::string>& robot_entry_keys() {
                                                 "controllers",
                                                 "srdf",
                                                 "self_collision",
-                                                "joint_limits"};
+                                                "joint_limits",
+                                                "sensors"};
   return keys;
 }
 
 // The top-level keys that describe the one robot: with `robots:` they belong in its entries.
 bool is_robot_key(const std::string& key) {
   for (const std::string& k : robot_entry_keys()) {
-    if (k == key && k != "name" && k != "urdf" && k != "namespace") return true;
+    // The top level's sensors: stay robot 0's beside robots: (its entry may list them too).
+    if (k == key && k != "name" && k != "urdf" && k != "namespace" && k != "sensors") return true;
   }
   return key == "robot";
 }
@@ -285,6 +287,8 @@ std::vector<Scene> read_robots(const SceneReader& r, const Field& v, const std::
         has_urdf = true;
       } else if (f.name == "srdf") {
         e.srdf = read_scene_srdf(r, f, base_dir);
+      } else if (f.name == "sensors") {
+        read_scene_sensors(r, f, e.sensors);
       } else if (f.name == "joint_limits") {
         e.constraints.joint_limits = r.boolean(f);
         e.constraints.joint_limits_given = true;
@@ -391,6 +395,7 @@ Scene parse_scene(const std::string& text, const std::string& base_dir,
     s.controllers = e.controllers;
     s.srdf = e.srdf;
     s.self_collision = e.self_collision;
+    s.sensors.insert(s.sensors.end(), e.sensors.begin(), e.sensors.end());
     s.robot_name = e.robot_name;
     s.robot_namespace = e.robot_namespace;
     if (e.constraints.joint_limits_given) {

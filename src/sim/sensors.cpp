@@ -37,8 +37,14 @@ std::uint64_t SensorSet::seed_of(const std::string& name) {
 }
 
 SensorSet::SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
-                     const std::string& urdf_xml)
-    : model_(&model), specs_(specs), data_(model), x0_(model), a_(VecX::Zero(model.nv)) {
+                     const std::string& urdf_xml, const std::string& robot)
+    : model_(&model),
+      robot_(robot),
+      prefix_(robot.empty() ? "" : robot + "/"),
+      specs_(specs),
+      data_(model),
+      x0_(model),
+      a_(VecX::Zero(model.nv)) {
   std::shared_ptr<const urdf::ModelInterface> urdf;
   const int nl = static_cast<int>(model.links.size());
   for (const SensorSpec& s : specs_) {
@@ -63,6 +69,7 @@ SensorSet::SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
     }
     const LinkFrame& lf = model.links[li];
     r.body = lf.body;
+    r.collision_link = prefix_ + lf.name;
     r.in_body = lf.offset * s.pose;
     r.period = 1;  // from the rate and the simulator's dt, in before_step
     if (s.type == SensorType::ForceTorque) {
@@ -157,8 +164,27 @@ double SensorSet::noise(Resolved& s, const SensorNoise& n) {
   return d(s.rng);
 }
 
+int SensorSet::robot_index(const Simulator& sim) const {
+  return robot_.empty() ? 0 : sim.robot_index(robot_);
+}
+
+int SensorSet::link_of(const CollisionObject& obj) const {
+  const std::string& name = obj.link;
+  if (name.size() <= prefix_.size() || name.compare(0, prefix_.size(), prefix_) != 0) return -1;
+  for (size_t l = 0; l < model_->links.size(); ++l) {
+    const std::string& own = model_->links[l].name;
+    if (name.size() == prefix_.size() + own.size() &&
+        name.compare(prefix_.size(), own.size(), own) == 0) {
+      return static_cast<int>(l);
+    }
+  }
+  return -1;
+}
+
 void SensorSet::before_step(const Simulator& sim) {
   pending_ = false;
+  const int robot = robot_index(sim);
+  if (robot < 0) return;
   const std::uint64_t k = sim.steps();
   bool due = false;
   if (sim.dt() != dt_) {  // the periods follow the step size
@@ -173,7 +199,7 @@ void SensorSet::before_step(const Simulator& sim) {
     due = due || (!sensor_is_rendered(specs_[i].type) && k % sensors_[i].period == 0);
   }
   if (!due) return;
-  const State& x = sim.state();
+  const State& x = sim.robot_state(robot);
   x0_.base = x.base;
   x0_.q = x.q;
   x0_.v = x.v;
@@ -188,8 +214,10 @@ void SensorSet::after_step(const Simulator& sim, bool ok) {
   if (!pending_) return;
   pending_ = false;
   if (!ok || sim.steps() != step0_ + 1) return;
+  const int robot = robot_index(sim);
+  if (robot < 0) return;
   const Model& m = *model_;
-  a_ = (sim.state().v - x0_.v) / sim.dt();
+  a_ = (sim.robot_state(robot).v - x0_.v) / sim.dt();
   rnea(m, data_, x0_.base, x0_.q, x0_.v, a_);
   const ConstraintSystem* cs = sim.constraints();
   contact_step_ = cs && cs->report().velocity_steps != velocity_steps0_;
@@ -267,6 +295,7 @@ Vec6 SensorSet::external_wrench(const Simulator& sim, const Resolved& s) const {
     W.tail<3>() += fb;
   };
   for (const ConstraintForce& f : cs->forces()) {
+    if (!robot_.empty()) break;  // the constraint system's own contact spheres are robot 0's
     if (f.kind != ConstraintForce::Contact || f.body < 0 || f.body > model_->n) continue;
     if (s.in_subtree_body[f.body] || (s.whole_body && f.body == s.body)) add(f.point, f.force);
   }
@@ -280,11 +309,21 @@ Vec6 SensorSet::external_wrench(const Simulator& sim, const Resolved& s) const {
       const int o = side ? c.b : c.a;
       if (o < 0 || o >= static_cast<int>(objects->size())) continue;
       const CollisionObject& obj = (*objects)[o];
-      if (obj.frame < 0 || obj.frame > model_->n) continue;
-      bool in = s.in_subtree_body[obj.frame] != 0;
-      if (!in && obj.frame == s.body) {
+      // Robot 0's shapes are on frames 0..n by their bare link names; a robot 1..'s carry its
+      // prefix (their frames come after the objects').
+      int body = obj.frame, link = -1;
+      if (!robot_.empty()) {
+        link = link_of(obj);
+        if (link < 0) continue;
+        body = model_->links[link].body;
+      }
+      if (body < 0 || body > model_->n) continue;
+      bool in = s.in_subtree_body[body] != 0;
+      if (!in && body == s.body) {
         in = s.whole_body;
-        for (int l : s.links) in = in || model_->links[l].name == obj.link;
+        for (int l : s.links) {
+          in = in || (robot_.empty() ? model_->links[l].name == obj.link : l == link);
+        }
       }
       if (in) add(c.point, (side ? inv_dt : -inv_dt) * c.impulse);
     }
@@ -294,7 +333,6 @@ Vec6 SensorSet::external_wrench(const Simulator& sim, const Resolved& s) const {
 
 void SensorSet::fill_contacts(const Simulator& sim, int i) {
   SensorReading& out = readings_[i];
-  const SensorSpec& spec = specs_[i];
   out.count = 0;
   out.total_force.setZero();
   const ConstraintSystem* cs = sim.constraints();
@@ -308,7 +346,8 @@ void SensorSet::fill_contacts(const Simulator& sim, int i) {
       const int o = side ? c.b : c.a, other = side ? c.a : c.b;
       if (o < 0 || o >= static_cast<int>(objects->size())) continue;
       const CollisionObject& obj = (*objects)[o];
-      if (obj.frame != sensors_[i].body || obj.link != spec.link) continue;
+      if (obj.link != sensors_[i].collision_link) continue;
+      if (robot_.empty() && obj.frame != sensors_[i].body) continue;
       const Vec3 f = (side ? inv_dt : -inv_dt) * c.impulse;
       if (c.depth < 0 && f.squaredNorm() == 0) continue;  // within the margin, not touching
       if (out.count == static_cast<int>(out.touches.size())) continue;

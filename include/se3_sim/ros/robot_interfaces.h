@@ -1,8 +1,9 @@
 // The ROS interface of a simulator's robots 1.. (docs/ros.md "Several robots"; robot 0 is the
 // node's own): per robot, under its namespace NS, the parameter NS/robot_description, the topics
 // NS/joint_states and NS/torque_command, its controllers' NS/NAME/command (a trajectory
-// controller's NS/NAME/state is not published yet), and its TF frames NS/LINK (REP 105: its root
-// link NS/ROOT hangs on the world frame; no tf_prefix).
+// controller's NS/NAME/state is not published yet), its TF frames NS/LINK (REP 105: its root
+// link NS/ROOT hangs on the world frame; no tf_prefix), and its sensors' topics NS/TOPIC (its
+// robots: entry's sensors: and its URDF's Gazebo sensor tags; robot_sensors.h).
 #pragma once
 
 #include <geometry_msgs/TransformStamped.h>
@@ -38,6 +39,11 @@ class RobotInterfaces {
   std::vector<geometry_msgs::TransformStamped> static_transforms(const ros::Time& stamp) const;
   /// Under the node's lock: every robot's joint_states and /tf.
   void publish(se3::Simulator& sim, const ros::Time& stamp, tf2_ros::TransformBroadcaster& tf);
+  /// Under the node's lock, around each Simulator::step: every robot's sensors (after_step
+  /// publishes the readings that are ready); reset_sensors after a reset of the simulator.
+  void before_step(const se3::Simulator& sim);
+  void after_step(const se3::Simulator& sim, bool ok);
+  void reset_sensors();
 
   struct Robot;
   struct RobotDeleter {
@@ -65,12 +71,14 @@ class RobotInterfaces {
  private:
   /// The robot's joint table, TF tree, topics and controllers' subscribers under R.rnh.
   void connect(Robot& R, const std::vector<std::pair<std::string, double>>& locked,
-               const std::vector<se3::ControllerSpec>& specs);
+               const std::vector<se3::ControllerSpec>& specs,
+               const std::vector<se3::SensorSpec>& sensors, const std::string& urdf);
   std::vector<RobotPtr> robots_;
   ros::NodeHandle nh_;
   std::string world_frame_;
   double max_effort_, max_wrench_;
   WithSim with_sim_;
+  bool use_sim_time_ = false;
 };
 
 }  // namespace se3_ros

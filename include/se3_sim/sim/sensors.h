@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "se3_sim/collision/collision.h"
 #include "se3_sim/collision/laser.h"
 #include "se3_sim/dynamics/dynamics.h"
 
@@ -124,9 +125,12 @@ struct SensorError : std::runtime_error {
 class SensorSet {
  public:
   /// urdf_xml gives the per-link inertias a force-torque sensor on a fixed joint needs (fixed
-  /// joints are merged in the model); "" is allowed when no sensor is on a fixed joint.
+  /// joints are merged in the model); "" is allowed when no sensor is on a fixed joint. robot:
+  /// "" for the simulator's robot 0, else the name of the robot 1.. whose sensors these are
+  /// (model is its model; its collision shapes are NAME/LINK, sim.h add_robot). A robot the
+  /// simulator no longer has (deleted) gives no readings.
   SensorSet(const Model& model, const std::vector<SensorSpec>& specs,
-            const std::string& urdf_xml = "");
+            const std::string& urdf_xml = "", const std::string& robot = "");
   const std::vector<SensorSpec>& specs() const { return specs_; }
   int size() const { return static_cast<int>(specs_.size()); }
   /// Noise generators back to their seeds (the sensor name's FNV-1a hash), readings cleared.
@@ -159,14 +163,21 @@ class SensorSet {
     std::vector<char> in_subtree_body;  ///< per body: wholly in the subtree
     std::mt19937_64 rng;
     Vec6 bias = Vec6::Zero();
+    std::string collision_link;  ///< contact: its link's name in the scene collision
   };
   void sample(const Simulator& sim, int i);
   Vec6 external_wrench(const Simulator& sim, const Resolved& s) const;
   void fill_contacts(const Simulator& sim, int i);
   void draw_biases();
+  /// The robot's index in sim (-1: deleted) and its link of collision object obj (-1: not
+  /// the robot's).
+  int robot_index(const Simulator& sim) const;
+  int link_of(const CollisionObject& obj) const;
   double noise(Resolved& s, const SensorNoise& n);
 
   const Model* model_;
+  std::string robot_;   ///< "" for robot 0, else the robot's name
+  std::string prefix_;  ///< robot_ + "/" (its collision objects' link names), "" for robot 0
   std::vector<SensorSpec> specs_;
   std::vector<Resolved> sensors_;
   std::vector<SensorReading> readings_;
