@@ -25,19 +25,16 @@
 #include <string>
 #include <vector>
 
+#include "../test/source_paths.h"
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/solver/constraints.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
 
 namespace {
 
 using namespace se3;
 
 std::string scene_path(const std::string& name) {
-  return std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/" + name + ".yaml";
+  return se3_sim_test::source_dir() + "/config/scenes/" + name + ".yaml";
 }
 
 double cpu_ns() {
@@ -71,7 +68,7 @@ Pair make_pair_for(const std::string& which) {
   if (which == "panda_limits") {
     Scene sc;
     sc.robot = "data/robots/panda.urdf";
-    sc.robot_path = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+    sc.robot_path = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
     sc.floating = false;
     sc.integrator = "semi_implicit_euler";
     Model m = scene_model(sc);

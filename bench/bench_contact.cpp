@@ -38,6 +38,8 @@
 
 #ifdef SE3_SIM_HAVE_MUJOCO
 #include <mujoco/mujoco.h>
+
+#include "../test/source_paths.h"
 #endif
 
 using namespace se3;
@@ -170,7 +172,7 @@ mjModel* load_robot(const Scene& sc, const Model& model, char* err, int nerr) {
     }
   } else {  // the robot's collision shapes, meshes by their resolved file
     GeometryOptions gopt;
-    gopt.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+    gopt.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
     const GeometryModel loaded = scene_geometry(sc, model, "", gopt);
     for (GeometryObject geo : loaded.collisions) {
       if (geo.stand_in || geo.body < 0) continue;
@@ -502,7 +504,7 @@ int contact_study(const std::string& file, const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string dir = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  const std::string dir = se3_sim_test::source_dir() + "/config/scenes/";
   if (argc == 3 && std::string(argv[1]) == "--study") {
     return contact_study(dir + "box_stack.yaml", argv[2]);
   }

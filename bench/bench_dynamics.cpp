@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include "../test/source_paths.h"
 #include "se3_sim/dynamics/dynamics.h"
 
 namespace {
@@ -69,7 +70,7 @@ double mi(const Model& m, Data& d, const SE3& b, const VecX& q, const VecX&, con
   return minv(m, d, b, q)(0, 0);
 }
 
-const std::string kDir = SE3_SIM_SOURCE_DIR "/data/robots/";
+const std::string kDir = se3_sim_test::source_dir() + "/data/robots/";
 const Subject kSubjects[] = {
     {"ur5", kDir + "ur5_robot.urdf", false},
     {"panda7", kDir + "panda.urdf", false},

@@ -61,6 +61,8 @@
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
+
+#include "../test/source_paths.h"
 #endif
 
 using namespace se3;
@@ -562,7 +564,7 @@ std::map<std::string, double> read_dumps(const std::string& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string dir = SE3_SIM_SOURCE_DIR "/data/robots", only;
+  std::string dir = se3_sim_test::source_dir() + "/data/robots", only;
   bool callgrind = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];

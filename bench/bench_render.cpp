@@ -42,6 +42,8 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 #include <GL/osmesa.h>
+
+#include "../test/source_paths.h"
 #endif
 
 namespace {
@@ -52,7 +54,7 @@ std::string g_robots;
 
 std::string robots_dir() {
   if (!g_robots.empty()) return g_robots;
-  return std::string(SE3_SIM_SOURCE_DIR) + "/data/robots";  // the package's, set by CMake
+  return se3_sim_test::source_dir() + "/data/robots";  // the package's, set by CMake
 }
 
 // ---------------------------------------------------------------- scenes

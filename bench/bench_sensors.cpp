@@ -38,6 +38,8 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 #include <GL/osmesa.h>
+
+#include "../test/source_paths.h"
 #endif
 
 namespace {
@@ -57,10 +59,10 @@ const World& world() {
   static std::unique_ptr<World> w;
   if (w) return *w;
   w = std::make_unique<World>();
-  const std::string dir = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/";
+  const std::string dir = se3_sim_test::source_dir() + "/data/robots/";
   w->model = model_from_urdf_file(dir + "panda.urdf");
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   go.paths.use_ros_package_path = false;
   w->geometry = geometry_from_urdf_file(w->model, dir + "panda.urdf", go);
   for (const std::string& s : w->geometry.warnings) std::cerr << "warning: " << s << "\n";

@@ -29,11 +29,8 @@
 #include <string>
 #include <vector>
 
+#include "../test/source_paths.h"
 #include "se3_sim/sim/sim.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
 
 namespace {
 
@@ -46,7 +43,7 @@ std::string scene_path(const std::string& name) {
   // Run from the package directory or from anywhere with SE3_SIM_SCENES set.
   const char* env = std::getenv("SE3_SIM_SCENES");
   if (env) return std::string(env) + "/" + name + ".yaml";
-  return std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/" + name + ".yaml";
+  return se3_sim_test::source_dir() + "/config/scenes/" + name + ".yaml";
 }
 
 double cpu_ns() {

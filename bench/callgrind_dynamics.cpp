@@ -12,18 +12,15 @@
 #include <string>
 #include <vector>
 
+#include "../test/source_paths.h"
 #include "se3_sim/dynamics/dynamics.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
 
 namespace {
 
 using namespace se3;
 
 Model load(const std::string& subject) {
-  const std::string dir = SE3_SIM_SOURCE_DIR "/data/robots/";
+  const std::string dir = se3_sim_test::source_dir() + "/data/robots/";
   UrdfOptions opt;
   if (subject == "ur5") return model_from_urdf_file(dir + "ur5_robot.urdf", opt);
   if (subject == "panda7") {

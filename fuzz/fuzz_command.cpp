@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../test/source_paths.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/sim/sim.h"
 
@@ -26,7 +27,7 @@ struct Rig {
 };
 
 Rig make_rig(bool floating) {
-  se3::Scene s = se3::load_scene(SE3_SIM_SOURCE_DIR "/config/scenes/fixed_panda.yaml");
+  se3::Scene s = se3::load_scene(se3_sim_test::source_dir() + "/config/scenes/fixed_panda.yaml");
   s.floating = floating;
   Rig r;
   r.sim = se3::make_simulator(s);

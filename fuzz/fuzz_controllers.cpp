@@ -6,11 +6,12 @@
 #include <memory>
 #include <string>
 
+#include "../test/source_paths.h"
 #include "se3_sim/sim/sim.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const se3::Scene scene =
-      se3::load_scene(SE3_SIM_SOURCE_DIR "/config/scenes/fixed_panda.yaml");
+      se3::load_scene(se3_sim_test::source_dir() + "/config/scenes/fixed_panda.yaml");
   static const std::unique_ptr<se3::Simulator> sim = se3::make_simulator(scene);
   std::vector<se3::ControllerSpec> specs;
   try {

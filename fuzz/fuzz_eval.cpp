@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "../test/source_paths.h"
 #include "se3_sim/model/model.h"
 #include "tools/se3_dyn/cli.h"
 
@@ -14,8 +15,9 @@ namespace {
 
 const se3::Model& model(int k) {
   static const se3::Model models[3] = {
-      se3::model_from_urdf_file(SE3_SIM_SOURCE_DIR "/data/robots/double_pendulum_simple.urdf"),
-      se3::model_from_urdf_file(SE3_SIM_SOURCE_DIR "/data/robots/panda.urdf", {true, {}}),
+      se3::model_from_urdf_file(se3_sim_test::source_dir() +
+                                "/data/robots/double_pendulum_simple.urdf"),
+      se3::model_from_urdf_file(se3_sim_test::source_dir() + "/data/robots/panda.urdf", {true, {}}),
       se3::make_chain(3, true)};
   return models[k % 3];
 }

@@ -15,6 +15,7 @@
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/sim/world.h"
+#include "source_paths.h"
 #include "test_util.h"
 
 extern "C" {
@@ -245,8 +246,7 @@ TEST(Alloc, RomeoFloating) {
 // FCL's narrow phase tests do allocate: its GJK makes its shape objects with new on every
 // query, about 5 allocations per pair; docs/collision.md.)
 TEST(Alloc, CollideOnTheGround) {
-  const Scene s =
-      load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/quadruped_ground.yaml");
+  const Scene s = load_scene(se3_sim_test::source_dir() + "/config/scenes/quadruped_ground.yaml");
   const Model m = scene_model(s);
   SceneCollision sc = scene_collision(s, &m);
   State x = scene_state(s, m);
@@ -335,7 +335,7 @@ TEST(Alloc, LongChainSimulatorNeedsLinearMemory) {
 // With controllers (position PID and effort), expiring torque commands and link wrenches, on a
 // free base with ground contact too: a step still allocates nothing.
 TEST(Alloc, SimulatorStepsWithControllersCommandsAndWrenches) {
-  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  const std::string scenes = se3_sim_test::source_dir() + "/config/scenes/";
   for (const char* file : {"fixed_panda.yaml", "quadruped_ground.yaml"}) {
     SCOPED_TRACE(file);
     auto sim = make_simulator(load_scene(scenes + file));
@@ -367,7 +367,7 @@ wrist: {type: effort_controllers/JointEffortController, joint: panda_joint7}
 // that follows it allocate nothing (the first may size the constraint workspace once).
 TEST(Alloc, StepsAfterASpawnOrDeleteAllocateNothing) {
   auto sim = make_simulator(
-      load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/quadruped_ground.yaml"));
+      load_scene(se3_sim_test::source_dir() + "/config/scenes/quadruped_ground.yaml"));
   ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
   sim->spawn_object(parse_scene_object(
       "name: ball\nshape: {sphere: 0.05}\nmass: 0.5\npose: {position: [5, 5, 50]}\n", "."));
@@ -384,7 +384,7 @@ TEST(Alloc, StepsAfterASpawnOrDeleteAllocateNothing) {
 // UR5's mesh contact with them allocates inside FCL whether or not the Panda is there), both
 // arms under their trajectory controllers and commands: the steps allocate nothing.
 TEST(Alloc, SeveralRobotsStepsAllocateNothing) {
-  Scene scene = load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/two_arms.yaml");
+  Scene scene = load_scene(se3_sim_test::source_dir() + "/config/scenes/two_arms.yaml");
   scene.objects.clear();
   auto sim = make_simulator(scene);
   ASSERT_EQ(sim->robot_count(), 2);
@@ -398,7 +398,7 @@ TEST(Alloc, SeveralRobotsStepsAllocateNothing) {
 // after the first one that follows each allocate nothing.
 TEST(Alloc, StepsAfterARobotSpawnOrDeleteAllocateNothing) {
   auto sim =
-      make_simulator(load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/fixed_arm.yaml"));
+      make_simulator(load_scene(se3_sim_test::source_dir() + "/config/scenes/fixed_arm.yaml"));
   ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
   RobotSpawn panda;
   std::string why;
@@ -448,7 +448,7 @@ TEST(Alloc, StepsAfterARobotSpawnOrDeleteInASceneWithCollisionAllocateNothing) {
 // checks allocate nothing in a step.
 TEST(Alloc, TrajectoryControllerStepsAllocateNothing) {
   auto sim =
-      make_simulator(load_scene(std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/fixed_arm.yaml"));
+      make_simulator(load_scene(se3_sim_test::source_dir() + "/config/scenes/fixed_arm.yaml"));
   auto specs = parse_controllers_text(R"(
 arm:
   type: effort_controllers/JointTrajectoryController
@@ -495,7 +495,7 @@ int main(int argc, char** argv) {
 // Simulator (rows from outside contacts, free bodies). Collision detection is not in these
 // steps (the ground contacts are the sim layer's own).
 TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
-  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  const std::string scenes = se3_sim_test::source_dir() + "/config/scenes/";
   for (const char* name : {"fourbar", "pinned_chain", "quadruped_ground"}) {
     for (ContactSolver solver : {ContactSolver::PGS, ContactSolver::ActiveSet}) {
       SCOPED_TRACE(std::string(name) + (solver == ContactSolver::PGS ? " pgs" : " active_set"));
@@ -557,7 +557,7 @@ TEST(Alloc, ConstraintAndContactStepsAllocateNothingAfterTheFirst) {
 // nothing from the heap either: the "column formed" flags and W's diagonal are sized with the
 // rest of the constraint system.
 TEST(Alloc, LazyDelassusColumnsAllocateNothing) {
-  const std::string scenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+  const std::string scenes = se3_sim_test::source_dir() + "/config/scenes/";
   Scene sc = load_scene(scenes + "quadruped_ground.yaml");
   sc.constraints.options.solver = ContactSolver::ActiveSet;
   const Model m = scene_model(sc);

@@ -10,12 +10,13 @@
 #include <vector>
 
 #include "se3_sim/collision/collision.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kRoot = se3_sim_test::source_dir();
 
 CollisionObject object(const std::string& name, const Shape& s, int frame, int group = 1,
                        const SE3& placement = SE3()) {

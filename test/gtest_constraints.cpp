@@ -15,13 +15,14 @@
 
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/solver/constraints.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-#ifdef SE3_SIM_SOURCE_DIR
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+#ifdef se3_sim_test::source_dir()
+const std::string kRoot = se3_sim_test::source_dir();
 #else
 const std::string kRoot = ".";
 #endif

@@ -18,12 +18,13 @@
 #include "same_bits.h"
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kScenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+const std::string kScenes = se3_sim_test::source_dir() + "/config/scenes/";
 constexpr double kG = 9.81;
 
 SceneObject free_object(const std::string& name, const Shape& shape, double mass,
@@ -337,7 +338,7 @@ TEST(Contact, EveryShippedSceneRuns) {
     const Scene sc = load_scene(e.path().string());
     std::string urdf;  // a scene for any robot (robot_description): the UR5
     if (sc.robot_path.empty() && sc.objects.empty()) {
-      std::ifstream in(std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/ur5_robot.urdf");
+      std::ifstream in(se3_sim_test::source_dir() + "/data/robots/ur5_robot.urdf");
       std::stringstream text;
       text << in.rdbuf();
       urdf = text.str();

@@ -16,13 +16,14 @@
 #include "se3_sim/sim/controllers.h"
 #include "se3_sim/sim/gain_check.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 #include "test_util.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 const std::string kScenes = kSource + "/config/scenes/";
 
 std::string controller_error(const std::string& yaml, const std::vector<std::string>& names = {}) {

@@ -16,12 +16,13 @@
 #include "se3_sim/sim/controllers.h"
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 
 // A fixed palm with two prismatic fingers along y: `right` mimics `left` mirrored
 // (multiplier -1, offset 0.01), and a tip sliding up and down (z) on the right finger mimics

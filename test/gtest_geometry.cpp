@@ -14,10 +14,7 @@
 #include <vector>
 
 #include "se3_sim/geometry/geometry.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
+#include "source_paths.h"
 
 using namespace se3;
 namespace fs = std::filesystem;
@@ -25,7 +22,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string source(const std::string& rel) {
-  return std::string(SE3_SIM_SOURCE_DIR) + "/" + rel;
+  return se3_sim_test::source_dir() + "/" + rel;
 }
 
 // A fresh folder under the test's temporary directory.

@@ -11,12 +11,13 @@
 #include "se3_sim/sim/ground.h"
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 
 // A base box (0.2 m) with an arm hanging 0.5 m below it on a revolute joint (a cylinder along
 // the link), its tip 0.6 m under the base's origin at zero; extra: more URDF text.

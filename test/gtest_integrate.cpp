@@ -12,6 +12,7 @@
 
 #include "se3_sim/integrate/integrate.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
@@ -584,7 +585,7 @@ TEST(Passive, ForcesActOnTheDampedAndRubbingJointsOnly) {
 }
 
 TEST(Effort, CommandsAreClampedToTheUrdfLimits) {
-  const std::string panda = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const std::string panda = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
   UrdfOptions o;
   o.locked = {{"panda_finger_joint1", 0.02}, {"panda_finger_joint2", 0.02}};
   Model m = model_from_urdf_file(panda, o);

@@ -12,9 +12,7 @@
 #include <string>
 #include <vector>
 
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
+#include "source_paths.h"
 
 namespace {
 
@@ -114,7 +112,7 @@ std::vector<std::string> quoted_includes(const fs::path& file) {
 }
 
 TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
-  const fs::path root = SE3_SIM_SOURCE_DIR;
+  const fs::path root = se3_sim_test::source_dir();
   int checked = 0;
   for (const auto& la : kAllowed) {
     const std::string& layer = la.first;
@@ -147,7 +145,7 @@ TEST(Layers, NoFileIncludesALayerAboveItsOwn) {
 // The public headers mirror src/: include/se3_sim/LAYER/NAME.h belongs to LAYER, and every header
 // there is in the table above.
 TEST(Layers, EachPublicHeaderLivesInItsLayersFolder) {
-  const fs::path root = SE3_SIM_SOURCE_DIR;
+  const fs::path root = se3_sim_test::source_dir();
   int headers = 0;
   for (const auto& e : fs::recursive_directory_iterator(root / "include" / "se3_sim")) {
     if (e.path().extension() != ".h") continue;
@@ -164,7 +162,7 @@ TEST(Layers, EachPublicHeaderLivesInItsLayersFolder) {
 // roscpp and ROS messages only in the ros layer (src/ros, include/se3_sim/ros) and the nodes:
 // the library builds and is tested without them.
 TEST(Layers, OnlyTheRosLayerIncludesRos) {
-  const fs::path root = SE3_SIM_SOURCE_DIR;
+  const fs::path root = se3_sim_test::source_dir();
   static const std::regex ros_re(
       R"re(^\s*#\s*include\s*[<"](ros|tf2_ros|tf2_msgs|std_msgs|std_srvs|sensor_msgs|geometry_msgs|visualization_msgs|rosgraph_msgs|xmlrpcpp|image_transport|se3_sim/[A-Z][A-Za-z]*\.h)[/">])re");
   int files = 0;

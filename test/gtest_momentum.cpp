@@ -16,12 +16,13 @@
 
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/solver/constraints.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kScenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
+const std::string kScenes = se3_sim_test::source_dir() + "/config/scenes/";
 
 // A single free link: 4 kg, principal inertia (0.3, 0.2, izz) kg m^2 about its centre, which is
 // its frame's origin. The reproducer has izz = 0.05, which the URDF reader takes although

@@ -11,12 +11,13 @@
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/sim/world.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kRoot = se3_sim_test::source_dir();
 
 Scene scene_of(const std::string& text) {
   return parse_scene(text, kRoot, "two.yaml");

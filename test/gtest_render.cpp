@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "se3_sim/render/render.h"
+#include "source_paths.h"
 
 using namespace se3;
 using namespace se3::render;
@@ -649,10 +650,10 @@ TEST(RenderScene, CameraSpecAndPngOfARealRobot) {
   EXPECT_FALSE(opt.auto_camera);
   EXPECT_EQ(opt.camera.focal_px, 900);
 
-  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const std::string urdf = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
   const Model m = model_from_urdf_file(urdf);
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
   EXPECT_TRUE(g.warnings.empty());
   RenderOptions o;
@@ -702,12 +703,12 @@ struct Robot {
 };
 
 Robot load_robot(const std::string& file, bool floating, bool load_meshes = true) {
-  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/" + file;
+  const std::string urdf = se3_sim_test::source_dir() + "/data/robots/" + file;
   UrdfOptions uo;
   uo.floating = floating;
   Robot r{model_from_urdf_file(urdf, uo), {}};
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   go.paths.use_ros_package_path = false;
   go.load_meshes = load_meshes;
   r.geometry = geometry_from_urdf_file(r.model, urdf, go);

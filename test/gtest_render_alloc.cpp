@@ -15,10 +15,7 @@
 
 #include "se3_sim/render/camera_sensor.h"
 #include "se3_sim/render/render.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
+#include "source_paths.h"
 
 extern "C" {
 void* __libc_malloc(std::size_t);
@@ -145,10 +142,10 @@ long allocations_of(F&& f) {
 }  // namespace
 
 TEST(RenderAlloc, FramesWithOverlayMarkersAndThreadsAllocateNothing) {
-  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const std::string urdf = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
   const Model m = model_from_urdf_file(urdf);
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   go.paths.use_ros_package_path = false;
   const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
   ASSERT_TRUE(g.warnings.empty());
@@ -212,10 +209,10 @@ TEST(RenderAlloc, FramesWithOverlayMarkersAndThreadsAllocateNothing) {
 // A depth camera on the Panda's hand (issue 38): rgb8, depth and the cloud of each frame from
 // buffers allocated once, while the camera moves with the hand.
 TEST(RenderAlloc, CameraSensorFramesAllocateNothing) {
-  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const std::string urdf = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
   const Model m = model_from_urdf_file(urdf);
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   go.paths.use_ros_package_path = false;
   const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
   Data d(m);

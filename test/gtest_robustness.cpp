@@ -21,14 +21,15 @@
 #include "se3_sim/geometry/geometry.h"
 #include "se3_sim/model/limits.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 const std::string kScenes = kSource + "/config/scenes/";
-const std::string kSe3Dyn = SE3_DYN_EXE;
+const std::string kSe3Dyn = se3_sim_test::se3_dyn_exe();
 
 std::string read(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -656,7 +657,7 @@ TEST(Se3DynLimits, SizesBeyondTheLimitsAreRefusedWithTheLimit) {
 // would hide the rest of the file from the count (fuzz_scene found it: 17 items counted where
 // yaml-cpp builds 39 nodes; the fuzz check allows a factor of two).
 TEST(Robustness, SceneTextBoundReadsBracketsInPlainScalarsAsText) {
-  std::ifstream in(std::string(SE3_SIM_SOURCE_DIR) +
+  std::ifstream in(se3_sim_test::source_dir() +
                    "/fuzz/corpus/scene/bracket_quote_in_plain_key.yaml");
   std::stringstream text;
   text << in.rdbuf();

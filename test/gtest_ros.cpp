@@ -15,12 +15,13 @@
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using XmlRpc::XmlRpcValue;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 
 std::string read(const std::string& path) {
   std::ifstream in(path);

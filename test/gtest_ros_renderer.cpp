@@ -13,10 +13,7 @@
 
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/renderer_convert.h"
-
-#ifndef SE3_SIM_SOURCE_DIR
-#define SE3_SIM_SOURCE_DIR "."
-#endif
+#include "source_paths.h"
 
 using namespace se3;
 namespace rr = se3::ros_renderer;
@@ -73,10 +70,10 @@ TEST(RosRenderer, CameraInfoIsThePinhole) {
 }
 
 TEST(RosRenderer, RvizMarkersNameTheMeshes) {
-  const std::string urdf = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/panda.urdf";
+  const std::string urdf = se3_sim_test::source_dir() + "/data/robots/panda.urdf";
   const Model m = model_from_urdf_file(urdf);
   GeometryOptions go;
-  go.paths.package_path = {std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes"};
+  go.paths.package_path = {se3_sim_test::source_dir() + "/data/meshes"};
   const GeometryModel g = geometry_from_urdf_file(m, urdf, go);
   const auto items = render::make_draw_items(m, g);
   std::vector<SE3> inv;
@@ -518,7 +515,7 @@ TEST(RosRenderer, SaveFramePathsNeverRepeat) {
 
 // package:// through rospack (ROS_PACKAGE_PATH), as the node resolves meshes.
 TEST(RosRenderer, RosResolverUsesRospack) {
-  const std::string meshes = std::string(SE3_SIM_SOURCE_DIR) + "/data/meshes";
+  const std::string meshes = se3_sim_test::source_dir() + "/data/meshes";
   setenv("ROS_PACKAGE_PATH", meshes.c_str(), 1);
   const ResourceResolver resolve = rr::ros_resolver();
   std::string err;

@@ -13,12 +13,13 @@
 #include "se3_sim/render/render.h"
 #include "se3_sim/sim/scene_collision.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kRoot = se3_sim_test::source_dir();
 const std::string kData = kRoot + "/data";
 
 // The SceneError message of parsing text (with base_dir data/), or "" when it parses.

@@ -11,12 +11,13 @@
 #include "se3_sim/sim/laser_world.h"
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/sim/world.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kRoot = se3_sim_test::source_dir();
 
 // A free-base chain high above, the ground and a low table far off: nothing at the sensors'
 // height (0.5 m) along +x until a crate is spawned at x = 2 (its near face at x = 1.8).

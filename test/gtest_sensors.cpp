@@ -13,13 +13,14 @@
 
 #include "se3_sim/sim/sensors.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kScenes = std::string(SE3_SIM_SOURCE_DIR) + "/config/scenes/";
-const std::string kRobots = std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/";
+const std::string kScenes = se3_sim_test::source_dir() + "/config/scenes/";
+const std::string kRobots = se3_sim_test::source_dir() + "/data/robots/";
 
 std::string file_text(const std::string& path) {
   std::ifstream in(path);

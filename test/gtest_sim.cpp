@@ -14,13 +14,14 @@
 
 #include "../src/sim/scene_reader.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 #include "test_util.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 const std::string kScenes = kSource + "/config/scenes/";
 
 std::string scene_error(const std::string& text) {
@@ -121,7 +122,7 @@ TEST(Scene, RelativeRobotPathsResolveAgainstTheSceneOrThePackage) {
 // Files named the ROS way: $(find PKG)/..., package://PKG/... (PKG's folder on ROS_PACKAGE_PATH)
 // and file:///...; an unknown package is one line naming the key and the package.
 TEST(Scene, RosStyleReferencesToRobotsAndSrdfs) {
-  const std::string src = SE3_SIM_SOURCE_DIR;
+  const std::string src = se3_sim_test::source_dir();
   setenv("ROS_PACKAGE_PATH", src.c_str(), 1);
   const std::string ur5 = src + "/data/robots/ur5_robot.urdf";
   for (const std::string& robot :

@@ -22,13 +22,14 @@
 #include "se3_sim/model/limits.h"
 #include "se3_sim/sim/controllers.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
-const std::string kSe3Dyn = SE3_DYN_EXE;
+const std::string kSource = se3_sim_test::source_dir();
+const std::string kSe3Dyn = se3_sim_test::se3_dyn_exe();
 
 std::string temp_file(const std::string& name, const std::string& text) {
   const std::string path =

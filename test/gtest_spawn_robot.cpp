@@ -13,12 +13,13 @@
 
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/sim/world.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kRoot = SE3_SIM_SOURCE_DIR;
+const std::string kRoot = se3_sim_test::source_dir();
 
 std::string text_of(const std::string& path) {
   std::string text, why;

@@ -21,6 +21,7 @@
 #include "../tools/charts/aba_long_double.h"
 #include "se3_sim/integrate/integrate.h"
 #include "se3_sim/sim/sim.h"
+#include "source_paths.h"
 
 using namespace se3;
 
@@ -305,7 +306,7 @@ int main(int argc, char** argv) {
 // friction 0.01 (regularized over 0.1 rad/s) on both joints, a constant torque on the first,
 // from 0.5 / -0.3 rad with rates, dt = 1 ms for 5 s.
 TEST(EnergyBalance, WorkOfDampingFrictionAndCommandsLeavesOnlyTheIntegratorsDrift) {
-  const Scene scene = load_scene(SE3_SIM_SOURCE_DIR "/config/scenes/pendulum.yaml");
+  const Scene scene = load_scene(se3_sim_test::source_dir() + "/config/scenes/pendulum.yaml");
   Model m = scene_model(scene);
   for (int i = 1; i <= m.n; ++i) m.damping[i] = 0.02, m.friction[i] = 0.01;
   State x0 = scene_state(scene, m);
@@ -340,7 +341,7 @@ TEST(EnergyBalance, WorkOfDampingFrictionAndCommandsLeavesOnlyTheIntegratorsDrif
   }
   // The headless run reports both figures.
   SimulateOptions o;
-  o.scene = SE3_SIM_SOURCE_DIR "/config/scenes/pendulum.yaml";
+  o.scene = se3_sim_test::source_dir() + "/config/scenes/pendulum.yaml";
   o.duration = 2.0;
   const SimulateResult r = simulate_headless(o);
   EXPECT_GT(r.energy_drift_rel, 1e-3) << "the URDF's damping removes energy";

@@ -19,12 +19,13 @@
 #include "se3_sim/sim/sim.h"
 #include "se3_sim/sim/trajectory.h"
 #include "se3_sim/sim/transmissions.h"
+#include "source_paths.h"
 
 using namespace se3;
 
 namespace {
 
-const std::string kSource = SE3_SIM_SOURCE_DIR;
+const std::string kSource = se3_sim_test::source_dir();
 const std::vector<std::string> kJoints = {"shoulder_pan_joint", "shoulder_lift_joint",
                                           "elbow_joint",        "wrist_1_joint",
                                           "wrist_2_joint",      "wrist_3_joint"};

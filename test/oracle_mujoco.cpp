@@ -20,6 +20,7 @@
 
 #ifdef SE3_SIM_HAVE_MUJOCO
 #include "mujoco_peer.h"
+#include "source_paths.h"
 #endif
 
 using namespace se3;
@@ -130,7 +131,7 @@ TEST(OracleMujoco, Robots) {
 // here: MuJoCo's Euler at t = 9.9 .. 17.4 s and ours at 9.2 .. 15.8 s over eight initial
 // states 1e-6 rad apart; the test allows a minute.
 TEST(StabilityMujoco, UndampedPandaEulerFailsOnBothSidesRk4Survives) {
-  const Scene scene = load_scene(SE3_SIM_SOURCE_DIR "/config/scenes/fixed_panda.yaml");
+  const Scene scene = load_scene(se3_sim_test::source_dir() + "/config/scenes/fixed_panda.yaml");
   Model m = scene_model(scene);
   for (int i = 1; i <= m.n; ++i) m.damping[i] = m.friction[i] = 0;
   const State x0 = scene_state(scene, m);

@@ -12,6 +12,7 @@
 #include "se3_sim/dynamics/dynamics.h"
 #include "se3_sim/lie/lie.h"
 #include "se3_sim/model/model.h"
+#include "source_paths.h"
 
 namespace se3_test {
 
@@ -23,7 +24,7 @@ using se3::Vec6;
 using se3::VecX;
 
 inline std::string robot_path(const std::string& file) {
-  return std::string(SE3_SIM_SOURCE_DIR) + "/data/robots/" + file;
+  return se3_sim_test::source_dir() + "/data/robots/" + file;
 }
 
 /// One URDF of data/robots with its expected number of moving joints.
