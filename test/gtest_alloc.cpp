@@ -419,7 +419,7 @@ TEST(Alloc, StepsAfterARobotSpawnOrDeleteAllocateNothing) {
 // block allocates inside FCL's box-box test whether the robot was spawned or listed in the
 // scene, as the UR5's meshes do above.)
 TEST(Alloc, StepsAfterARobotSpawnOrDeleteInASceneWithCollisionAllocateNothing) {
-  const std::string root = SE3_SIM_SOURCE_DIR;
+  const std::string root = se3_sim_test::source_dir();
   auto sim = make_simulator(parse_scene(
       "gravity: [0, 0, -9.81]\nintegrator: contact_semi_implicit\ndt: 0.001\nground: true\n"
       "objects: [{name: block, shape: {box: [0.6, 0.6, 0.2]}, pose: {position: [2, 0, 0.1]}}]\n"
