@@ -315,7 +315,7 @@ WorldEditPtr Simulator::prepare_objects(std::vector<SceneObject> specs) const {
     if (coupled_robots()) {
       robots = extra_robot_models();
       for (const auto& r : extra_) {
-        limits.push_back(r->constraints && r->constraints->spec().joint_limits);
+        limits.push_back(r->constraints_start && r->constraints_start->spec().joint_limits);
       }
     }
     e->constraints = coupled_constraints(e->body_models, robots, limits);
@@ -768,8 +768,10 @@ void Simulator::with_robot_collision(const RobotSpawn& sp, const GeometryModel& 
   e.scene_collision = std::move(sc);
   std::vector<const Model*> robots = extra_robot_models();
   std::vector<bool> limits;
-  for (const auto& r : extra_)
-    limits.push_back(r->constraints && r->constraints->spec().joint_limits);
+  // constraints_start, not constraints: a reset beside this preparation replaces the latter.
+  for (const auto& r : extra_) {
+    limits.push_back(r->constraints_start && r->constraints_start->spec().joint_limits);
+  }
   robots.push_back(&m);
   limits.push_back(sp.joint_limits);
   e.constraints = coupled_constraints(body_models_, robots, limits);
@@ -841,7 +843,8 @@ void Simulator::without_robot_collision(int k, WorldEdit& e) const {
   for (size_t j = 0; j < extra_.size(); ++j) {
     if (static_cast<int>(j) + 1 == k) continue;
     robots.push_back(extra_[j]->model.get());
-    limits.push_back(extra_[j]->constraints && extra_[j]->constraints->spec().joint_limits);
+    limits.push_back(extra_[j]->constraints_start &&
+                     extra_[j]->constraints_start->spec().joint_limits);
   }
   e.constraints = coupled_constraints(body_models_, robots, limits);
   e.constraints_start = std::make_unique<ConstraintSystem>(*e.constraints);
