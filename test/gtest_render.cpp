@@ -449,6 +449,70 @@ TEST(RenderRaster, IndexedFrontEndMatchesTheOtherPaths) {
   }
 }
 
+// Triangles whose pixel box is at most 2 x 2 pixels (the AVX2 loop computes their pixels' z
+// and colour eight triangles wide, then tests and writes one triangle at a time): many of them
+// piled on a few pixels, both sides seen, in colour and depth alone, one band or two, give the
+// scalar path's bits.
+TEST(RenderRaster, TinyTrianglesGiveTheScalarPathsBits) {
+  if (raster_best_path() != RasterPath::Avx2) GTEST_SKIP() << "no AVX2 here";
+  const int W = 37, H = 29, nv = 3000;
+  uint32_t seed = 4242u;
+  auto rnd = [&seed]() {  // [0, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  std::vector<int32_t> X(nv), Y(nv);
+  std::vector<float> Z(nv), KF(nv), KB(nv);
+  for (int i = 0; i < nv; ++i) {
+    // Triples near one point: boxes of one to four pixels, on a 10 x 8 pixel patch.
+    const int c = i / 3;
+    X[i] = int32_t(16 * (2 + (c * 7) % 10) + rnd() * 30);
+    Y[i] = int32_t(16 * (3 + (c * 3) % 8) + rnd() * 30);
+    Z[i] = float(0.5 + rnd());
+    KF[i] = float(2 * rnd());  // above 1 too: colours clamp at 255
+    KB[i] = float(rnd());
+  }
+  std::vector<uint32_t> idx(nv);
+  for (int i = 0; i < nv; ++i) idx[std::size_t(i)] = uint32_t(i);
+  const float rgb[3] = {230.0f, 140.0f, 35.0f};
+  std::size_t tiny = 0;
+  for (int t = 0; t < nv / 3; ++t) {
+    const int32_t* xs = &X[3 * t];
+    const int32_t* ys = &Y[3 * t];
+    const int32_t x0 = std::min({xs[0], xs[1], xs[2]}), x1 = std::max({xs[0], xs[1], xs[2]});
+    const int32_t y0 = std::min({ys[0], ys[1], ys[2]}), y1 = std::max({ys[0], ys[1], ys[2]});
+    tiny += ((x1 - 8) >> 4) - ((x0 + 7) >> 4) <= 1 && ((y1 - 8) >> 4) - ((y0 + 7) >> 4) <= 1;
+  }
+  EXPECT_GT(tiny, std::size_t(nv / 3 * 9 / 10)) << "boxes of at most 2 x 2 pixels";
+  const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), nullptr};
+  for (int paint = 0; paint < 2; ++paint) {
+    for (int parts = 1; parts <= 2; ++parts) {
+      Framebuffer ref(W, H), avx(W, H);
+      std::size_t n[2] = {0, 0};
+      for (int k = 0; k < 2; ++k) {
+        Framebuffer& fb = k == 0 ? ref : avx;
+        fb.set_path(k == 0 ? RasterPath::Scalar : RasterPath::Avx2);
+        fb.set_paint(paint == 1);
+        fb.clear_depth();
+        std::fill(fb.color(), fb.color() + W * H, 0x123456u);
+        for (int part = 0; part < parts; ++part) {
+          RowSet rows;
+          rows.shift = 2;
+          rows.parts = parts;
+          rows.part = part;
+          n[k] += fb.fill_indexed(va, idx.data(), std::size_t(nv / 3), rgb, false, true, rows,
+                                  nullptr, nullptr);
+        }
+      }
+      EXPECT_EQ(n[0], n[1]);
+      EXPECT_EQ(std::memcmp(ref.depth(), avx.depth(), 4 * std::size_t(W) * H), 0)
+          << "depth, paint " << paint << ", parts " << parts;
+      EXPECT_EQ(std::memcmp(ref.color(), avx.color(), 4 * std::size_t(W) * H), 0)
+          << "colour, paint " << paint << ", parts " << parts;
+    }
+  }
+}
+
 // VertexArrays without outcodes (out null: every vertex inside) draw as with all-zero
 // outcodes, on every path, in the eight-wide front end and its one-at-a-time tail.
 TEST(RenderRaster, NullOutcodesDrawAsAllInside) {
