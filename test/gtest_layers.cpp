@@ -56,6 +56,8 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/rendered_sensors.h", "ros"},
     {"se3_sim/ros/world_services.h", "ros"},
     {"se3_sim/ros/robot_interfaces.h", "ros"},
+    {"se3_sim/ros/simulator_config.h", "ros"},
+    {"se3_sim/ros/sim_markers.h", "ros"},
     {"se3_sim/model/gazebo_tags.h", "model"},
     {"se3_sim/collision/laser.h", "collision"},
     {"se3_sim/sim/laser_world.h", "sim"},
