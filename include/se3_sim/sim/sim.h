@@ -323,6 +323,9 @@ class Simulator {
   /// the objects and the constraint system's own contact spheres (which the scene collision
   /// holds). Call after set_objects and set_constraints; resets.
   void set_scene_collision(SceneCollision&& collision);
+  /// set_objects, then set_scene_collision, without building the objects' own collision model
+  /// (and its hulls) that the scene collision replaces: make_simulator's order.
+  void set_objects(const std::vector<SceneObject>& objects, SceneCollision&& collision);
   /// The objects as set, in the order given (static ones included).
   const std::vector<SceneObject>& object_specs() const { return object_specs_; }
   /// The contacts of the last step's end (the collision layer's; empty without objects or a
@@ -545,6 +548,9 @@ class Simulator {
     double size = 0;  ///< smallest extent of its shape (m)
   };
   void note_fast_step(size_t j, double moved);
+  /// set_objects without its constraint rebuild and reset; own_collision: the objects' own
+  /// collision model (none when a scene collision follows).
+  void place_objects(const std::vector<SceneObject>& objects, bool own_collision);
   void reset_objects();
   /// The constraint system the step needs (the scene's, or an empty one for free objects).
   void rebuild_constraints();
