@@ -160,7 +160,8 @@ class SimulatorNodeImpl {
   std::vector<double> ctl_state_last_;          ///< simulated time of the last NAME/state
   std::vector<se3::TrajectoryStatus> ctl_status_;
   se3_sim::JointTrajectoryControllerState ctl_state_msg_;
-  std::string urdf_text_;  ///< the robot's URDF (transmissions), "" for chain:N
+  std::string urdf_text_;  ///< the robot's URDF (transmissions, sensors), "" for chain:N
+  std::unique_ptr<se3::UrdfXml> urdf_tree_;  ///< urdf_text_ parsed, for both
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> tf_static_;
@@ -306,6 +307,7 @@ void SimulatorNodeImpl::configure() {
                : scene_.robot_path.empty() || scene_.robot_path.compare(0, 6, "chain:") == 0
                    ? std::string()
                    : read_file(scene_.robot_path);
+  urdf_tree_ = std::make_unique<se3::UrdfXml>(urdf_text_);
   setup_controllers();
   // The scene's objects (free and static; make_simulator set them and their contact): on /tf
   // (a frame each, parent the world) and on sim_markers (namespace objects).
@@ -413,7 +415,7 @@ void SimulatorNodeImpl::setup_controllers() {
   }
   // Each controller's interface against the joint's <transmission>s, and its joints: the
   // scene's must fit, one named in ~controllers that does not fails alone.
-  const auto transmissions = se3::parse_transmissions(urdf_text_);
+  const auto transmissions = se3::parse_transmissions(*urdf_tree_);
   for (auto it = specs.begin(); it != specs.end();) {
     try {
       se3::check_interfaces({*it}, transmissions);
@@ -982,7 +984,8 @@ bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
 
 void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
   std::vector<std::string> warnings;
-  std::vector<se3::SensorSpec> specs = se3::scene_sensors(scene_, urdf_xml, &warnings);
+  std::vector<se3::SensorSpec> specs =
+      se3::scene_sensors(scene_, urdf_text_.empty() ? nullptr : urdf_tree_.get(), &warnings);
   for (const std::string& w : warnings) ROS_WARN("simulator: %s", w.c_str());
   // Cameras and lasers: drawn on a thread of their own (rendered_sensors.h).
   std::vector<se3::SensorSpec> drawn;
@@ -1000,8 +1003,7 @@ void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
     for (const auto& t : rendered_->static_transforms()) sensor_tfs_.push_back(t);
   }
   if (specs.empty()) return;
-  sensors_ =
-      std::make_unique<se3::SensorSet>(*model_, specs, se3::scene_urdf_text(scene_, urdf_xml));
+  sensors_ = std::make_unique<se3::SensorSet>(*model_, specs, urdf_text_);
   const se3::Model& m = *model_;
   for (const se3::SensorSpec& s : specs) {
     const std::string topic = s.topic.empty() ? s.name : s.topic;

@@ -675,6 +675,9 @@ void add_link_wrench_force(const Model& model, const Data& data, int link, const
 /// warnings into *warnings.
 std::vector<SensorSpec> scene_sensors(const Scene& scene, const std::string& urdf_xml,
                                       std::vector<std::string>* warnings);
+/// The same with the robot's URDF parsed (null: no URDF).
+std::vector<SensorSpec> scene_sensors(const Scene& scene, const UrdfXml* urdf,
+                                      std::vector<std::string>* warnings);
 /// The URDF text of a scene's robot: urdf_xml when not empty, else the robot file's text ("" for
 /// chain:N or no robot).
 std::string scene_urdf_text(const Scene& scene, const std::string& urdf_xml = "");
