@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "se3_sim/ros/convert.h"
 
@@ -44,12 +45,10 @@ bool base_visual_marker(const se3::Scene& scene, const se3::SE3& base,
   bus.type = visualization_msgs::Marker::CUBE;
   bus.action = visualization_msgs::Marker::ADD;
   bus.pose = to_pose(se3::SE3(base.R, base.act(scene.base_visual_origin)));
-  bus.scale.x = scene.base_visual_box.x();
-  bus.scale.y = scene.base_visual_box.y();
-  bus.scale.z = scene.base_visual_box.z();
-  bus.color.r = scene.base_visual_color.x();
-  bus.color.g = scene.base_visual_color.y();
-  bus.color.b = scene.base_visual_color.z();
+  const se3::Vec3& box = scene.base_visual_box;
+  std::tie(bus.scale.x, bus.scale.y, bus.scale.z) = std::make_tuple(box.x(), box.y(), box.z());
+  const se3::Vec3& rgb = scene.base_visual_color;
+  std::tie(bus.color.r, bus.color.g, bus.color.b) = std::make_tuple(rgb.x(), rgb.y(), rgb.z());
   bus.color.a = 1.0;
   return true;
 }
