@@ -13,6 +13,7 @@
 
 #include "se3_sim/sim/sensors.h"
 #include "se3_sim/sim/sim.h"
+#include "se3_sim/sim/transmissions.h"
 #include "source_paths.h"
 
 using namespace se3;
@@ -616,6 +617,57 @@ TEST(Sensors, RobotsAfterTheFirstCarryTheirOwnSensors) {
   const SE3& base = sim->robot_state(1).base;
   const Vec3 up = base.R.transpose() * Vec3(0, 0, g);
   EXPECT_LT((sb.reading(3).linear_acceleration - up).norm(), 0.05 * g);
+}
+
+// One parse of a URDF serves the readers of its tags (sensors, transmissions): what each reads
+// from the document is what it reads from the text.
+TEST(Sensors, OneUrdfXmlForSensorsAndTransmissions) {
+  const std::string urdf = R"(<robot name="r">
+  <link name="base"/><link name="tool"/>
+  <joint name="wrist" type="revolute"><parent link="base"/><child link="tool"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="5" velocity="1"/></joint>
+  <transmission name="wrist_tr">
+    <type>transmission_interface/SimpleTransmission</type>
+    <joint name="wrist"><hardwareInterface>hardware_interface/EffortJointInterface</hardwareInterface></joint>
+    <actuator name="wrist_motor"><mechanicalReduction>50</mechanicalReduction></actuator>
+  </transmission>
+  <gazebo reference="base">
+    <sensor name="imu_sensor" type="imu"><update_rate>200</update_rate></sensor>
+    <sensor name="sonar" type="sonar"/>
+  </gazebo>
+</robot>)";
+  const UrdfXml doc(urdf);
+  EXPECT_EQ(doc.error(), "");
+  std::vector<std::string> w_text, w_doc;
+  const auto s_text = sensors_from_urdf(urdf, &w_text);
+  const auto s_doc = sensors_from_urdf(doc, &w_doc);
+  ASSERT_EQ(s_doc.size(), 1u);
+  ASSERT_EQ(s_text.size(), 1u);
+  EXPECT_EQ(s_doc[0].name, "imu_sensor");
+  EXPECT_EQ(s_doc[0].rate, s_text[0].rate);
+  EXPECT_EQ(s_doc[0].where, s_text[0].where);
+  EXPECT_EQ(w_doc, w_text);  // the sonar
+  EXPECT_EQ(w_doc.size(), 1u);
+  const auto t_doc = parse_transmissions(doc);
+  const auto t_text = parse_transmissions(urdf);
+  ASSERT_EQ(t_doc.size(), 1u);
+  ASSERT_EQ(t_text.size(), 1u);
+  EXPECT_EQ(t_doc[0].joint, "wrist");
+  EXPECT_EQ(t_doc[0].reduction, 50);
+  EXPECT_EQ(t_doc[0].interfaces, t_text[0].interfaces);
+  EXPECT_EQ(t_doc[0].line, t_text[0].line);
+
+  // XML that does not parse: the same warning, no transmissions.
+  const std::string broken = "<robot name=\"r\"><link name=\"a\">";
+  const UrdfXml bad(broken);
+  EXPECT_NE(bad.error(), "");
+  std::vector<std::string> b_text, b_doc;
+  EXPECT_TRUE(sensors_from_urdf(bad, &b_doc).empty());
+  EXPECT_TRUE(sensors_from_urdf(broken, &b_text).empty());
+  EXPECT_EQ(b_doc, b_text);
+  ASSERT_EQ(b_doc.size(), 1u);
+  EXPECT_NE(b_doc[0].find("the XML does not parse"), std::string::npos) << b_doc[0];
+  EXPECT_TRUE(parse_transmissions(bad).empty());
 }
 
 int main(int argc, char** argv) {

@@ -6,6 +6,7 @@
 #include <fcl/fcl.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 
@@ -817,8 +818,17 @@ std::shared_ptr<fcl::CollisionGeometryd> fcl_shape(const CollisionObject& o,
 
 }  // namespace
 
+namespace {
+std::atomic<std::uint64_t> models_constructed{0};
+}  // namespace
+
+std::uint64_t CollisionModel::constructed() {
+  return models_constructed.load(std::memory_order_relaxed);
+}
+
 CollisionModel::CollisionModel(std::vector<CollisionObject> objects, CollisionOptions options)
     : objects_(std::move(objects)), options_(std::move(options)), impl_(std::make_unique<Impl>()) {
+  if (!objects_.empty()) models_constructed.fetch_add(1, std::memory_order_relaxed);
   Impl& m = *impl_;
   const int n = int(objects_.size());
   m.n = n;

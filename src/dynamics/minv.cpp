@@ -11,6 +11,7 @@
 // output, O(n d) per column.
 #include <Eigen/Cholesky>
 
+#include "../lie/simd.h"
 #include "joint.h"
 #include "se3_sim/dynamics/dynamics.h"
 
@@ -143,7 +144,7 @@ const MatX& minv_recursive(const Model& model, Data& data, const SE3& base, cons
     const int len = model.subtree_end[i] - i + 1;
     // Row i of D^-1 (upper triangle) is kept as column i (contiguous in column-major storage).
     // The column loops touch entry j of each array only at step j (no loop-carried
-    // dependency, also when P_i and P_parent share storage), hence `ivdep`.
+    // dependency, also when P_i and P_parent share storage), hence SE3_SIM_IVDEP.
     // One fused pass over the subtree's columns: r = Omega^-1 (e_i - S^T F), F += U r.
     double* r = Mi.col(row).data();
     double* f0 = F.row(0).data();
@@ -158,13 +159,13 @@ const MatX& minv_recursive(const Model& model, Data& data, const SE3& base, cons
     r[row] = Dinv;
     const double s0 = -Dinv * S[0], s1 = -Dinv * S[1], s2 = -Dinv * S[2], s3 = -Dinv * S[3],
                  s4 = -Dinv * S[4], s5 = -Dinv * S[5];
-#pragma GCC ivdep
+    SE3_SIM_IVDEP
     for (int j = row + 1; j < row + len; ++j) {
       r[j] = s0 * f0[j] + s1 * f1[j] + s2 * f2[j] + s3 * f3[j] + s4 * f4[j] + s5 * f5[j];
     }
     if (carry) {  // (62)
       const double u0 = U[0], u1 = U[1], u2 = U[2], u3 = U[3], u4 = U[4], u5 = U[5];
-#pragma GCC ivdep
+      SE3_SIM_IVDEP
       for (int j = row; j < row + len; ++j) {
         const double x = r[j];
         f0[j] += u0 * x;
@@ -279,7 +280,7 @@ const MatX& minv_recursive(const Model& model, Data& data, const SE3& base, cons
       // rows), so the first column only finishes row i (r[row] is the diagonal entry itself).
       r[row] -=
           w0 * p0[row] + w1 * p1[row] + w2 * p2[row] + w3 * p3[row] + w4 * p4[row] + w5 * p5[row];
-#pragma GCC ivdep
+      SE3_SIM_IVDEP
       for (int j = row + 1; j < nv; ++j) {
         const double a0 = p0[j], a1 = p1[j], a2 = p2[j], a3 = p3[j], a4 = p4[j], a5 = p5[j];
         const double x =
@@ -294,7 +295,7 @@ const MatX& minv_recursive(const Model& model, Data& data, const SE3& base, cons
         q5[j] = a5 + s5 * x;
       }
     } else {
-#pragma GCC ivdep
+      SE3_SIM_IVDEP
       for (int j = row + 1; j < nv; ++j) {
         const double x = r[j];
         mrow[static_cast<std::ptrdiff_t>(j) * nv] = x;

@@ -20,10 +20,8 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <fstream>
 #include <map>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 #include "se3_sim/ApplyWrench.h"
@@ -41,6 +39,8 @@
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/rendered_sensors.h"
 #include "se3_sim/ros/robot_interfaces.h"
+#include "se3_sim/ros/sim_markers.h"
+#include "se3_sim/ros/simulator_config.h"
 #include "se3_sim/ros/world_services.h"
 #include "se3_sim/sim/gain_check.h"
 #include "se3_sim/sim/ground.h"
@@ -65,56 +65,6 @@ std::string read_file(const std::string& path) {
     throw std::runtime_error("cannot read URDF file '" + path + "': " + why);
   }
   return text;
-}
-
-bool file_exists(const std::string& path) {
-  return se3::not_a_regular_file(path).empty();
-}
-
-// "gx gy gz", "[gx, gy, gz]" or "gx,gy,gz": three finite numbers.
-se3::Vec3 parse_vec3(std::string text, const std::string& name) {
-  for (char& c : text) {
-    if (c == '[' || c == ']' || c == ',') c = ' ';
-  }
-  std::istringstream in(text);
-  se3::Vec3 v;
-  std::string rest;
-  if (!(in >> v.x() >> v.y() >> v.z()) || (in >> rest) || !v.allFinite()) {
-    throw std::runtime_error(name + " needs three numbers, e.g. \"0 0 -9.81\" (got '" + text +
-                             "')");
-  }
-  return v;
-}
-
-// A YAML map of joint names to numbers ("{j1: 0.5, j2: -1}"); "" or "{}" for none.
-std::vector<std::pair<std::string, double>> joint_values(const std::string& text,
-                                                         const std::string& name) {
-  std::vector<std::pair<std::string, double>> out;
-  if (text.empty()) return out;
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(name + ": " + e.what());
-  }
-  if (root.IsNull()) return out;
-  if (!root.IsMap()) {
-    throw std::runtime_error(name + " needs a map joint: value, e.g. \"{joint1: 0.5}\" (got '" +
-                             text + "')");
-  }
-  for (const auto& kv : root) {
-    const std::string joint = kv.first.as<std::string>();
-    double value = 0;
-    try {
-      value = kv.second.as<double>();
-    } catch (const YAML::Exception&) {
-      throw std::runtime_error(name + ": joint '" + joint + "' needs a number");
-    }
-    if (!std::isfinite(value))
-      throw std::runtime_error(name + ": joint '" + joint + "' is not finite");
-    out.emplace_back(joint, value);
-  }
-  return out;
 }
 
 // A step request slice holds the simulator at most this long before the node publishes and
@@ -158,7 +108,6 @@ class SimulatorNodeImpl {
  private:
   // ---- setup
   void configure();
-  std::string scene_file(const std::string& arg, bool robot_given) const;
   void set_initial_positions(const std::vector<std::pair<std::string, double>>& values);
   void setup_controllers();
 
@@ -201,11 +150,9 @@ class SimulatorNodeImpl {
   void publish_sensors();
   /// The sensors of the scene and the URDF's Gazebo tags, their publishers and frames.
   void setup_sensors(const std::string& urdf_xml);
-  void add_constraint_forces(const se3::ConstraintSystem& sys, const std_msgs::Header& header,
-                             se3_sim::ConstraintForces& cf,
-                             visualization_msgs::MarkerArray& markers) const;
 
   ros::NodeHandle nh_, pnh_, ctl_nh_;
+  SimulatorConfig config_;  ///< the private parameters (simulator_config.h)
   ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_, constraint_pub_;
   ros::Subscriber cmd_sub_;
   std::vector<ros::Subscriber> ctl_subs_;
@@ -213,7 +160,8 @@ class SimulatorNodeImpl {
   std::vector<double> ctl_state_last_;          ///< simulated time of the last NAME/state
   std::vector<se3::TrajectoryStatus> ctl_status_;
   se3_sim::JointTrajectoryControllerState ctl_state_msg_;
-  std::string urdf_text_;  ///< the robot's URDF (transmissions), "" for chain:N
+  std::string urdf_text_;  ///< the robot's URDF (transmissions, sensors), "" for chain:N
+  std::unique_ptr<se3::UrdfXml> urdf_tree_;  ///< urdf_text_ parsed, for both
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> tf_static_;
@@ -276,45 +224,17 @@ class SimulatorNodeImpl {
 
 // ------------------------------------------------------------------ setup
 
-// The ~scene argument: "auto", a shipped scene's name (config/scenes/NAME.yaml, from ~scene_dir)
-// or a scene file; a relative path is taken from ~cwd (the directory roslaunch was started in).
-// "auto" is the generic scene when a robot comes from outside (robot:= or an already loaded
-// robot_description), else the satellite demo.
-std::string SimulatorNodeImpl::scene_file(const std::string& arg, bool robot_given) const {
-  const std::string dir = get_text(pnh_, "scene_dir").value_or("");
-  std::string name = arg;
-  if (name == "auto") name = robot_given ? "generic" : "satellite_arm";
-  if (name.find('/') == std::string::npos) {
-    std::string file = name;
-    if (file.size() < 5 || file.compare(file.size() - 5, 5, ".yaml") != 0) file += ".yaml";
-    if (!dir.empty() && file_exists(dir + "/" + file)) return dir + "/" + file;
-    if (file_exists(file)) return file;
-    throw std::runtime_error("scene '" + arg + "' is neither a scene of " +
-                             (dir.empty() ? std::string("config/scenes") : dir) +
-                             " (generic, satellite_arm, fixed_panda, ...) nor a file");
-  }
-  if (name[0] != '/') {
-    const std::string cwd = get_text(pnh_, "cwd").value_or("");
-    if (!cwd.empty()) return cwd + "/" + name;
-  }
-  return name;
-}
-
 void SimulatorNodeImpl::configure() {
+  config_ = read_simulator_config(NodeParams(pnh_));
+  const SimulatorConfig& c = config_;
   // The robot: ~urdf_file (sim.launch's robot:=), else robot_description (loaded by the user,
   // e.g. xacro's output; sim.launch empties it unless use_robot_description), else the scene's
-  // robot.
-  std::string urdf_file = get_text(pnh_, "urdf_file").value_or("");
-  if (!urdf_file.empty() && urdf_file[0] != '/') {  // relative to where roslaunch runs
-    const std::string cwd = get_text(pnh_, "cwd").value_or("");
-    if (!cwd.empty()) urdf_file = cwd + "/" + urdf_file;
-  }
-  // ~urdf_file (robot:=) wins over the robot_description sim.launch loaded from it.
+  // robot. ~urdf_file (robot:=) wins over the robot_description sim.launch loaded from it.
+  const std::string& urdf_file = c.urdf_file;
   std::string urdf_xml =
       urdf_file.empty() ? get_text(nh_, "robot_description").value_or("") : read_file(urdf_file);
   const bool had_description = urdf_file.empty() && !urdf_xml.empty();
-  const std::string scene_arg = get_text(pnh_, "scene").value_or("");
-  const std::string scene_path = scene_arg.empty() ? "" : scene_file(scene_arg, !urdf_xml.empty());
+  const std::string scene_path = c.scene.empty() ? "" : scene_file(c, !urdf_xml.empty());
   if (!scene_path.empty()) scene_ = se3::load_scene(scene_path);
   // Relative mesh names: beside ~urdf_file (robot:=), or in robot_description_dir when the
   // robot_description was loaded by the user; the renderer reads the same parameter.
@@ -340,41 +260,17 @@ void SimulatorNodeImpl::configure() {
                   : !urdf_xml.empty()
                       ? (had_description ? "robot_description" : "~urdf_file " + urdf_file)
                       : "the scene's robot " + scene_.robot;
-  // The generic defaults (docs/design.md, "Launch files"): a scene that does not say `base:`
-  // has a fixed base, unless the URDF's root is free by a floating joint (the model reads
-  // that); floating:=true frees any base.
-  if (!scene_.base_given) scene_.floating = false;
-  // Scene overrides: set and not "" (sim.launch always sets them, "" meaning the scene's).
-  if (auto b = get_bool(pnh_, "floating")) scene_.floating = *b;
-  if (auto b = get_bool(pnh_, "joint_limits")) scene_.constraints.joint_limits = *b;
-  if (auto g = get_text(pnh_, "gravity")) scene_.gravity = parse_vec3(*g, "~gravity");
-  if (auto s = get_text(pnh_, "integrator")) scene_.integrator = *s;
-  if (auto x = get_double(pnh_, "dt")) scene_.dt = *x;
-  if (auto x = get_double(pnh_, "tol")) scene_.tol = *x;
-  if (auto x = get_double(pnh_, "real_time_factor")) scene_.real_time_factor = *x;
-  if (auto x = get_double(pnh_, "publish_rate")) scene_.publish_rate = *x;
-  const auto initial =
-      joint_values(get_text(pnh_, "initial_positions").value_or(""), "~initial_positions");
-  command_timeout_ = get_double(pnh_, "command_timeout").value_or(0.5);
-  world_frame_ = get_text(pnh_, "world_frame").value_or("world");
-  world_frame_ = se3::frame_name(world_frame_);  // tf2 frame names have no leading '/'
-  lockstep_ = get_bool(pnh_, "lockstep").value_or(false);
-  max_wrench_ = get_double(pnh_, "max_wrench").value_or(1e4);
-  max_effort_ = get_double(pnh_, "max_effort").value_or(1e4);
+  // The generic defaults (docs/design.md, "Launch files") and the overrides (set and not "";
+  // sim.launch always sets them, "" meaning the scene's).
+  apply_scene_overrides(c, scene_);
+  const auto& initial = c.initial_positions;
+  command_timeout_ = c.command_timeout;
+  world_frame_ = c.world_frame;
+  lockstep_ = c.lockstep;
+  max_wrench_ = c.max_wrench;
+  max_effort_ = c.max_effort;
   use_sim_time_ = get_bool(nh_, "/use_sim_time").value_or(false);
-  if (const std::string why = se3::dt_problem(scene_.dt); !why.empty()) {
-    throw std::runtime_error("~dt " + se3::three_figures(scene_.dt) + " s " + why);
-  }
-  if (!(scene_.tol > 0)) throw std::runtime_error("~tol must be > 0");
-  if (!(scene_.real_time_factor >= 0)) throw std::runtime_error("~real_time_factor must be >= 0");
-  if (!(scene_.publish_rate > 0)) throw std::runtime_error("~publish_rate must be > 0");
-  if (command_timeout_ < 0) throw std::runtime_error("~command_timeout must be >= 0 (0: never)");
-  if (!(max_wrench_ > 0) || !(max_effort_ > 0)) {
-    throw std::runtime_error("~max_wrench and ~max_effort must be > 0");
-  }
-  const double period = get_double(pnh_, "control_period").value_or(scene_.dt);
-  if (!(period > 0)) throw std::runtime_error("~control_period must be > 0");
-  lockstep_steps_ = static_cast<int>(std::max(1.0, std::min(1e6, std::round(period / scene_.dt))));
+  lockstep_steps_ = lockstep_steps(c, scene_.dt);
 
   sim_ = se3::make_simulator(scene_, urdf_xml);
   urdf_xml_ = urdf_xml;
@@ -411,6 +307,7 @@ void SimulatorNodeImpl::configure() {
                : scene_.robot_path.empty() || scene_.robot_path.compare(0, 6, "chain:") == 0
                    ? std::string()
                    : read_file(scene_.robot_path);
+  urdf_tree_ = std::make_unique<se3::UrdfXml>(urdf_text_);
   setup_controllers();
   // The scene's objects (free and static; make_simulator set them and their contact): on /tf
   // (a frame each, parent the world) and on sim_markers (namespace objects).
@@ -494,8 +391,8 @@ void SimulatorNodeImpl::set_initial_positions(
 // ~controller_namespace, default this node's namespace); a name in both: the parameter
 // server's. Each listens on <namespace>/NAME/command.
 void SimulatorNodeImpl::setup_controllers() {
-  std::string ns = get_text(pnh_, "controller_namespace").value_or("");
-  const std::vector<std::string> names = get_names(pnh_, "controllers");
+  std::string ns = config_.controller_namespace;
+  const std::vector<std::string>& names = config_.controllers;
   if (ns.empty()) ns = controllers_namespace(nh_, urdf_text_, *model_, names);
   ctl_nh_ = ns.empty() ? nh_ : ros::NodeHandle(nh_, ns);
   std::vector<se3::ControllerSpec> specs;
@@ -518,7 +415,7 @@ void SimulatorNodeImpl::setup_controllers() {
   }
   // Each controller's interface against the joint's <transmission>s, and its joints: the
   // scene's must fit, one named in ~controllers that does not fails alone.
-  const auto transmissions = se3::parse_transmissions(urdf_text_);
+  const auto transmissions = se3::parse_transmissions(*urdf_tree_);
   for (auto it = specs.begin(); it != specs.end();) {
     try {
       se3::check_interfaces({*it}, transmissions);
@@ -671,7 +568,8 @@ void SimulatorNodeImpl::setup_world_services() {
     anchored_ = 0;
     publish_clock();
   };
-  const std::string dir = scene_.file.empty() ? get_text(pnh_, "cwd").value_or(".")
+  const std::string dir = scene_.file.empty()
+                              ? (config_.cwd.empty() ? std::string(".") : config_.cwd)
                           : scene_.file.find('/') == std::string::npos
                               ? std::string(".")
                               : scene_.file.substr(0, scene_.file.find_last_of('/'));
@@ -1090,7 +988,8 @@ bool SimulatorNodeImpl::on_clear_wrenches(std_srvs::Trigger::Request&,
 
 void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
   std::vector<std::string> warnings;
-  std::vector<se3::SensorSpec> specs = se3::scene_sensors(scene_, urdf_xml, &warnings);
+  std::vector<se3::SensorSpec> specs =
+      se3::scene_sensors(scene_, urdf_text_.empty() ? nullptr : urdf_tree_.get(), &warnings);
   for (const std::string& w : warnings) ROS_WARN("simulator: %s", w.c_str());
   // Cameras and lasers: drawn on a thread of their own (rendered_sensors.h).
   std::vector<se3::SensorSpec> drawn;
@@ -1108,8 +1007,7 @@ void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
     for (const auto& t : rendered_->static_transforms()) sensor_tfs_.push_back(t);
   }
   if (specs.empty()) return;
-  sensors_ =
-      std::make_unique<se3::SensorSet>(*model_, specs, se3::scene_urdf_text(scene_, urdf_xml));
+  sensors_ = std::make_unique<se3::SensorSet>(*model_, specs, urdf_text_);
   const se3::Model& m = *model_;
   for (const se3::SensorSpec& s : specs) {
     const std::string topic = s.topic.empty() ? s.name : s.topic;
@@ -1305,7 +1203,6 @@ void SimulatorNodeImpl::publish_controller_states() {
 
 void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   const se3::Model& m = *model_;
-  const se3::State& x = sim_->state();
   const ros::Time t = stamp();
   se3_sim::SimStats st;
   const double wall = seconds(now - period_start_);
@@ -1355,143 +1252,20 @@ void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {
   step_wall_ = Clock::duration::zero();
   period_start_ = now;
 
-  // Markers: centre of mass, the scene's base box, an arrow along each joint axis with an
-  // effort, and the constraint forces.
+  // Markers (sim_markers.h): centre of mass, objects, the scene's base box, an arrow along each
+  // joint axis with an effort, and the constraint forces.
+  std_msgs::Header header;
+  header.stamp = t;
+  header.frame_id = world_frame_;
   visualization_msgs::MarkerArray markers;
-  const se3::Vec3 c = sim_->center_of_mass();
-  visualization_msgs::Marker com;
-  com.header.stamp = t;
-  com.header.frame_id = world_frame_;
-  com.ns = "com";
-  com.type = visualization_msgs::Marker::SPHERE;
-  com.action = visualization_msgs::Marker::ADD;
-  com.pose.position.x = c.x();
-  com.pose.position.y = c.y();
-  com.pose.position.z = c.z();
-  com.pose.orientation.w = 1;
-  com.scale.x = com.scale.y = com.scale.z = 0.05;
-  com.color.r = 1.0;
-  com.color.g = 0.8;
-  com.color.a = 1.0;
-  markers.markers.push_back(com);
-  append_object_markers(sim_->object_specs(), sim_->objects(), world_frame_, t, markers);
-  if (scene_.has_base_visual) {  // the scene's box on the base link (e.g. a satellite bus)
-    visualization_msgs::Marker bus;
-    bus.header = com.header;
-    bus.ns = "base_visual";
-    bus.type = visualization_msgs::Marker::CUBE;
-    bus.action = visualization_msgs::Marker::ADD;
-    bus.pose = to_pose(se3::SE3(x.base.R, x.base.act(scene_.base_visual_origin)));
-    bus.scale.x = scene_.base_visual_box.x();
-    bus.scale.y = scene_.base_visual_box.y();
-    bus.scale.z = scene_.base_visual_box.z();
-    bus.color.r = scene_.base_visual_color.x();
-    bus.color.g = scene_.base_visual_color.y();
-    bus.color.b = scene_.base_visual_color.z();
-    bus.color.a = 1.0;
-    markers.markers.push_back(bus);
-  }
-  const std::vector<se3::SE3>& oMb = sim_->body_poses();  // from center_of_mass() above
-  const se3::VecX& act = sim_->actuation();
-  for (int i = 1; i <= m.n; ++i) {
-    visualization_msgs::Marker a;
-    a.header = com.header;
-    a.ns = "torque";
-    a.id = i;
-    a.type = visualization_msgs::Marker::ARROW;
-    const double e = act[m.idx_v(i)];
-    if (e == 0) {
-      a.action = visualization_msgs::Marker::DELETE;
-      markers.markers.push_back(a);
-      continue;
-    }
-    a.action = visualization_msgs::Marker::ADD;
-    const double lim = std::isfinite(m.effort[i]) && m.effort[i] > 0 ? m.effort[i] : 10.0;
-    const se3::Vec3 o = oMb[i].p, axis = oMb[i].R.col(2) * (e > 0 ? 1.0 : -1.0);
-    const se3::Vec3 tip = o + axis * (0.05 + 0.25 * std::min(1.0, std::abs(e) / lim));
-    geometry_msgs::Point p0, p1;
-    p0.x = o.x();
-    p0.y = o.y();
-    p0.z = o.z();
-    p1.x = tip.x();
-    p1.y = tip.y();
-    p1.z = tip.z();
-    a.points = {p0, p1};
-    a.pose.orientation.w = 1;
-    a.scale.x = 0.01;
-    a.scale.y = 0.02;
-    a.scale.z = 0.03;
-    a.color.r = e > 0 ? 1.0 : 0.2;
-    a.color.b = e > 0 ? 0.2 : 1.0;
-    a.color.a = 1.0;
-    markers.markers.push_back(a);
-  }
+  sim_markers(*sim_, scene_, header, markers);
   if (const se3::ConstraintSystem* sys = sim_->constraints()) {
     se3_sim::ConstraintForces cf;
-    add_constraint_forces(*sys, com.header, cf, markers);
+    append_constraint_forces(m, sys->forces(), header, cf, markers);
     constraint_pub_.publish(cf);
   }
   stats_pub_.publish(st);
   marker_pub_.publish(markers);
-}
-
-// Constraint and contact forces as a message and as arrows on sim_markers (namespace
-// "constraint"): one arrow per constraint row group, from the application point along the
-// force, 0.3 m for a force equal to the robot's weight (at least 2 cm, at most 0.6 m).
-void SimulatorNodeImpl::add_constraint_forces(const se3::ConstraintSystem& sys,
-                                              const std_msgs::Header& header,
-                                              se3_sim::ConstraintForces& cf,
-                                              visualization_msgs::MarkerArray& markers) const {
-  const se3::Model& m = *model_;
-  cf.header = header;
-  const double weight = std::max(m.total_mass() * 9.81, 1e-6);
-  const std::vector<se3::ConstraintForce>& forces = sys.forces();
-  for (size_t k = 0; k < forces.size(); ++k) {
-    const se3::ConstraintForce& f = forces[k];
-    const bool ok = f.point.allFinite() && f.force.allFinite() && f.torque.allFinite();
-    geometry_msgs::Point p;
-    geometry_msgs::Vector3 F, T;
-    if (ok) {
-      p.x = f.point.x(), p.y = f.point.y(), p.z = f.point.z();
-      F.x = f.force.x(), F.y = f.force.y(), F.z = f.force.z();
-      T.x = f.torque.x(), T.y = f.torque.y(), T.z = f.torque.z();
-    }
-    cf.name.push_back(f.name);
-    cf.kind.push_back(static_cast<uint8_t>(f.kind));
-    cf.link.push_back(f.body >= 0 && f.body <= m.n ? m.body_name[f.body] : std::string());
-    cf.point.push_back(p);
-    cf.force.push_back(F);
-    cf.torque.push_back(T);
-    cf.joint_force.push_back(finite_or_zero(f.joint_force));
-    cf.gap.push_back(finite_or_zero(f.gap));
-    cf.active.push_back(ok && f.active);
-
-    visualization_msgs::Marker a;
-    a.header = header;
-    a.ns = "constraint";
-    a.id = static_cast<int>(k);
-    a.type = visualization_msgs::Marker::ARROW;
-    const double mag = ok ? f.force.norm() : 0.0;
-    if (!(ok && f.active) || mag <= 0) {
-      a.action = visualization_msgs::Marker::DELETE;
-      markers.markers.push_back(a);
-      continue;
-    }
-    a.action = visualization_msgs::Marker::ADD;
-    const double len = std::min(0.6, std::max(0.02, 0.3 * mag / weight));
-    const se3::Vec3 tip = f.point + f.force / mag * len;
-    geometry_msgs::Point p1;
-    p1.x = tip.x(), p1.y = tip.y(), p1.z = tip.z();
-    a.points = {p, p1};
-    a.pose.orientation.w = 1;
-    a.scale.x = 0.008;
-    a.scale.y = 0.016;
-    a.scale.z = 0.024;
-    a.color.g = 0.9;
-    a.color.b = f.kind == se3::ConstraintForce::Contact ? 0.2 : 0.9;
-    a.color.a = 1.0;
-    markers.markers.push_back(a);
-  }
 }
 
 // ------------------------------------------------------------------ public face

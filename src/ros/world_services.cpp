@@ -78,6 +78,23 @@ class NameFilter {
   regex_t re_;
 };
 
+// spawn_entity's allow_renaming, as Gazebo's: `prepare` the edit; while it is refused for a name
+// in use that `renamable` accepts, `rename` the entity NAME_1, NAME_2, ... (at most 1000 tries)
+// and prepare again. The edit, or null when no free name was found; any other refusal is thrown.
+template <class Prepare, class Renamable, class Rename>
+se3::WorldEditPtr prepare_renaming(bool allow_renaming, Prepare prepare, Renamable renamable,
+                                   Rename rename) {
+  for (int suffix = 1; suffix <= 1000; ++suffix) {
+    try {
+      return prepare();
+    } catch (const se3::WorldError& e) {
+      if (!(allow_renaming && e.kind == Kind::NameInUse && renamable(e))) throw;
+      rename(suffix);
+    }
+  }
+  return nullptr;
+}
+
 std::uint8_t category_of(const se3::WorldModel& m) {
   if (m.kind == "robot") return se3_sim::EntityCategory::CATEGORY_ROBOT;
   return m.is_static ? se3_sim::EntityCategory::CATEGORY_STATIC
@@ -252,31 +269,27 @@ struct WorldServices::Impl {
         return true;
       }
     }
+    // Preparation off the simulator's lock: shapes, collision model, constraint system.
+    se3::WorldEditPtr edit;
     std::string why;
     std::uint8_t code = Result::RESULT_OK;
-    se3::WorldEditPtr edit;
     const std::string base = object.name;
-    for (int suffix = 1; suffix <= 1000; ++suffix) {
-      // Preparation off the simulator's lock: shapes, collision model, constraint system.
-      try {
-        edit = prepare(object);
-        break;
-      } catch (const se3::WorldError& e) {
-        if (e.kind == Kind::NameInUse && req.allow_renaming) {
-          object.name = object.material.name = base + "_" + std::to_string(suffix);
-          continue;
-        }
-        why = e.what();
-        code = e.kind == Kind::NameInUse     ? std::uint8_t(Srv::NAME_NOT_UNIQUE)
-               : e.kind == Kind::NameInvalid ? std::uint8_t(Srv::NAME_INVALID)
-               : e.kind == Kind::InvalidPose ? std::uint8_t(Srv::INVALID_POSE)
-                                             : std::uint8_t(Result::RESULT_OPERATION_FAILED);
-        break;
-      } catch (const std::exception& e) {
-        why = e.what();
-        code = Result::RESULT_OPERATION_FAILED;
-        break;
-      }
+    try {
+      edit = prepare_renaming(
+          req.allow_renaming, [&] { return prepare(object); },
+          [](const se3::WorldError&) { return true; },
+          [&](int suffix) {
+            object.name = object.material.name = base + "_" + std::to_string(suffix);
+          });
+    } catch (const se3::WorldError& e) {
+      why = e.what();
+      code = e.kind == Kind::NameInUse     ? std::uint8_t(Srv::NAME_NOT_UNIQUE)
+             : e.kind == Kind::NameInvalid ? std::uint8_t(Srv::NAME_INVALID)
+             : e.kind == Kind::InvalidPose ? std::uint8_t(Srv::INVALID_POSE)
+                                           : std::uint8_t(Result::RESULT_OPERATION_FAILED);
+    } catch (const std::exception& e) {
+      why = e.what();
+      code = Result::RESULT_OPERATION_FAILED;
     }
     if (!edit) {
       fail(res.result, code, why.empty() ? "no free name" : why);
@@ -336,48 +349,47 @@ struct WorldServices::Impl {
     std::string why;
     std::uint8_t code = Result::RESULT_OK;
     std::string base;  // the name suffixes go on (allow_renaming)
-    for (int suffix = 1; suffix <= 1000 && !edit; ++suffix) {
-      try {
-        // Off the simulator's lock, as prepare() below.
-        edit = sim->prepare_spawn_robot(spawn);
-      } catch (const se3::WorldError& e) {
-        if (e.kind == Kind::NameInUse && req.allow_renaming &&
-            std::string(e.what()).compare(0, 5, "name ") == 0) {
-          // The URDF's robot name when the request has none (the URDF parsed a moment ago).
-          if (base.empty()) base = req.name.empty() ? urdf_robot_name(urdf) : req.name;
-          spawn.name = base + "_" + std::to_string(suffix);
-          continue;
-        }
-        // The request's field, then the library's line (which names its own field).
-        why = e.what();
-        const bool ns = why.compare(0, 10, "namespace ") == 0;
-        switch (e.kind) {
-          case Kind::Resource:
-            // A collision mesh that did not load (a scene with collision) is a missing asset.
-            code = why.find("contact needs it") != std::string::npos ? Srv::MISSING_ASSETS
-                                                                     : Srv::RESOURCE_PARSE_ERROR;
-            why = "entity_resource (" + source + "): " + why;
-            break;
-          case Kind::NameInUse:
-          case Kind::NameInvalid:
-            code = ns                          ? Srv::NAMESPACE_INVALID
-                   : e.kind == Kind::NameInUse ? Srv::NAME_NOT_UNIQUE
-                                               : Srv::NAME_INVALID;
-            why = (ns ? "entity_namespace: " : "name: ") + why;
-            break;
-          case Kind::InvalidPose:
-            code = Srv::INVALID_POSE;
-            why = "initial_pose: " + why;
-            break;
-          default:
-            code = Result::RESULT_OPERATION_FAILED;
-        }
-        break;
-      } catch (const std::exception& e) {
-        why = e.what();
-        code = Result::RESULT_OPERATION_FAILED;
-        break;
+    try {
+      // Off the simulator's lock, as prepare() for objects.
+      edit = prepare_renaming(
+          req.allow_renaming, [&] { return sim->prepare_spawn_robot(spawn); },
+          // The robot's name in use (not its namespace): renamed.
+          [](const se3::WorldError& e) {
+            return std::string(e.what()).compare(0, 5, "name ") == 0;
+          },
+          [&](int suffix) {
+            // The URDF's robot name when the request has none (the URDF parsed a moment ago).
+            if (base.empty()) base = req.name.empty() ? urdf_robot_name(urdf) : req.name;
+            spawn.name = base + "_" + std::to_string(suffix);
+          });
+    } catch (const se3::WorldError& e) {
+      // The request's field, then the library's line (which names its own field).
+      why = e.what();
+      const bool ns = why.compare(0, 10, "namespace ") == 0;
+      switch (e.kind) {
+        case Kind::Resource:
+          // A collision mesh that did not load (a scene with collision) is a missing asset.
+          code = why.find("contact needs it") != std::string::npos ? Srv::MISSING_ASSETS
+                                                                   : Srv::RESOURCE_PARSE_ERROR;
+          why = "entity_resource (" + source + "): " + why;
+          break;
+        case Kind::NameInUse:
+        case Kind::NameInvalid:
+          code = ns                          ? Srv::NAMESPACE_INVALID
+                 : e.kind == Kind::NameInUse ? Srv::NAME_NOT_UNIQUE
+                                             : Srv::NAME_INVALID;
+          why = (ns ? "entity_namespace: " : "name: ") + why;
+          break;
+        case Kind::InvalidPose:
+          code = Srv::INVALID_POSE;
+          why = "initial_pose: " + why;
+          break;
+        default:
+          code = Result::RESULT_OPERATION_FAILED;
       }
+    } catch (const std::exception& e) {
+      why = e.what();
+      code = Result::RESULT_OPERATION_FAILED;
     }
     if (!edit) {
       fail(res.result, code, why.empty() ? "name: no free name" : why);

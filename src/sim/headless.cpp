@@ -147,11 +147,12 @@ SimulateResult simulate_headless(const SimulateOptions& o) {
   Simulator sim(std::move(model), x0, cfg);
   const ConstraintSpec spec = scene_constraints(scene, sim.model());
   if (!spec.empty()) sim.set_constraints(spec);
-  if (!scene.objects.empty()) sim.set_objects(scene.objects);
-  if (uses_scene_collision(scene)) {
+  if (uses_scene_collision(scene)) {  // the objects' collision model: the scene collision's
     const GeometryModel none;
-    sim.set_scene_collision(
-        scene_collision(scene, &sim.model(), scene.robot_path.empty() ? &none : nullptr));
+    sim.set_objects(scene.objects, scene_collision(scene, &sim.model(),
+                                                   scene.robot_path.empty() ? &none : nullptr));
+  } else if (!scene.objects.empty()) {
+    sim.set_objects(scene.objects);
   }
   if (!scene.controllers.empty()) {
     sim.set_controllers(scene.controllers);

@@ -611,10 +611,17 @@ std::string scene_urdf_text(const Scene& scene, const std::string& urdf_xml) {
 
 std::vector<SensorSpec> scene_sensors(const Scene& scene, const std::string& urdf_xml,
                                       std::vector<std::string>* warnings) {
-  std::vector<SensorSpec> out = scene.sensors;
   const std::string xml = scene_urdf_text(scene, urdf_xml);
-  if (xml.empty()) return out;
-  for (SensorSpec& s : sensors_from_urdf(xml, warnings)) {
+  if (xml.empty()) return scene_sensors(scene, nullptr, warnings);
+  const UrdfXml urdf(xml);
+  return scene_sensors(scene, &urdf, warnings);
+}
+
+std::vector<SensorSpec> scene_sensors(const Scene& scene, const UrdfXml* urdf,
+                                      std::vector<std::string>* warnings) {
+  std::vector<SensorSpec> out = scene.sensors;
+  if (!urdf) return out;
+  for (SensorSpec& s : sensors_from_urdf(*urdf, warnings)) {
     bool taken = false;
     for (const SensorSpec& t : out) taken = taken || t.name == s.name;
     if (taken) {

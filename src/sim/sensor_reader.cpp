@@ -7,6 +7,7 @@
 
 #include "../model/xml_text.h"
 #include "scene_reader.h"
+#include "se3_sim/model/urdf_xml.h"
 #include "se3_sim/sim/sensors.h"
 
 namespace se3 {
@@ -309,16 +310,20 @@ std::string plugin_name(const tinyxml2::XMLElement* p) {
 
 std::vector<SensorSpec> sensors_from_urdf(const std::string& urdf_xml,
                                           std::vector<std::string>* warnings) {
+  return sensors_from_urdf(UrdfXml(urdf_xml), warnings);
+}
+
+std::vector<SensorSpec> sensors_from_urdf(const UrdfXml& urdf,
+                                          std::vector<std::string>* warnings) {
   std::vector<SensorSpec> out;
   auto warn = [&](const std::string& w) {
     if (warnings) warnings->push_back(w);
   };
-  tinyxml2::XMLDocument doc;
-  if (doc.Parse(urdf_xml.c_str(), urdf_xml.size()) != tinyxml2::XML_SUCCESS) {
-    warn("URDF sensors: the XML does not parse (" + std::string(doc.ErrorName()) + ")");
+  if (!urdf.error().empty()) {
+    warn("URDF sensors: the XML does not parse (" + urdf.error() + ")");
     return out;
   }
-  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  const tinyxml2::XMLElement* robot = urdf.robot();
   if (!robot) return out;
   for (const auto* g = robot->FirstChildElement("gazebo"); g; g = g->NextSiblingElement("gazebo")) {
     const char* ref = g->Attribute("reference");

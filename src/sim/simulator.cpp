@@ -379,6 +379,17 @@ const VecX& Simulator::step_forces() {
 }
 
 void Simulator::set_objects(const std::vector<SceneObject>& objects) {
+  place_objects(objects, true);
+  rebuild_constraints();
+  reset();
+}
+
+void Simulator::set_objects(const std::vector<SceneObject>& objects, SceneCollision&& collision) {
+  place_objects(objects, false);
+  set_scene_collision(std::move(collision));
+}
+
+void Simulator::place_objects(const std::vector<SceneObject>& objects, bool own_collision) {
   std::vector<ObjectBody> bodies;
   for (size_t j = 0; j < objects.size(); ++j) {
     const SceneObject& o = objects[j];
@@ -417,17 +428,20 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
   body_states_.clear();
   body_a_.clear();
   collision_.reset();
+  for (const ObjectBody& b : bodies_) {
+    body_models_.push_back(b.model.get());
+    body_states_.push_back(b.initial);
+    body_a_.push_back(VecX::Zero(6));
+  }
+  contacts_fresh_ = false;
+  body_last_good_ = body_states_;
+  if (!own_collision) return;
   std::vector<CollisionObject> colliders;
   for (size_t j = 0, free_index = 0; j < object_specs_.size(); ++j) {
     const SceneObject& o = object_specs_[j];
     const int frame =
         o.is_static ? CollisionObject::kWorld : model_->n + 1 + static_cast<int>(free_index++);
     colliders.push_back(object_collider(o, frame));
-  }
-  for (const ObjectBody& b : bodies_) {
-    body_models_.push_back(b.model.get());
-    body_states_.push_back(b.initial);
-    body_a_.push_back(VecX::Zero(6));
   }
   if (spec_.ground) {  // the plane n.x = offset, solid below: z <= 0 of its shape frame
     CollisionObject g;
@@ -452,10 +466,6 @@ void Simulator::set_objects(const std::vector<SceneObject>& objects) {
     frame_poses_.assign(model_->n + 1 + bodies_.size(), SE3());
     collision_data_.contacts.reserve(64 * bodies_.size());
   }
-  contacts_fresh_ = false;
-  body_last_good_ = body_states_;
-  rebuild_constraints();
-  reset();
 }
 
 void Simulator::reset_objects() {
@@ -909,11 +919,12 @@ std::unique_ptr<Simulator> make_simulator(const Scene& scene, const std::string&
   add_scene_robots(*sim, scene);  // before the scene collision, which holds their shapes
   const ConstraintSpec spec = scene_constraints(scene, sim->model(), urdf_xml);
   if (!spec.empty()) sim->set_constraints(spec);
-  if (!scene.objects.empty()) sim->set_objects(scene.objects);
-  if (uses_scene_collision(scene)) {
+  if (uses_scene_collision(scene)) {  // the objects' collision model: the scene collision's
     const GeometryModel none;
-    sim->set_scene_collision(scene_collision(scene, &sim->model(), robot ? g : &none, urdf_xml,
-                                             sim->extra_robot_models()));
+    sim->set_objects(scene.objects, scene_collision(scene, &sim->model(), robot ? g : &none,
+                                                    urdf_xml, sim->extra_robot_models()));
+  } else if (!scene.objects.empty()) {
+    sim->set_objects(scene.objects);
   }
   if (!scene.controllers.empty()) sim->set_controllers(scene.controllers);
   set_gazebo_gravity(*sim, gazebo);

@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "../model/xml_text.h"
+#include "se3_sim/model/urdf_xml.h"
 
 namespace se3 {
 
@@ -38,10 +39,12 @@ double reduction_of(const tinyxml2::XMLElement* parent, double fallback) {
 }  // namespace
 
 std::vector<JointTransmission> parse_transmissions(const std::string& urdf_xml) {
+  return parse_transmissions(UrdfXml(urdf_xml));
+}
+
+std::vector<JointTransmission> parse_transmissions(const UrdfXml& urdf) {
   std::vector<JointTransmission> out;
-  tinyxml2::XMLDocument doc;
-  if (doc.Parse(urdf_xml.c_str(), urdf_xml.size()) != tinyxml2::XML_SUCCESS) return out;
-  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  const tinyxml2::XMLElement* robot = urdf.robot();
   if (!robot) return out;
   for (auto* t = robot->FirstChildElement("transmission"); t;
        t = t->NextSiblingElement("transmission")) {

@@ -128,6 +128,9 @@ class CollisionModel {
   bool may_collide(int i, int j) const;
   /// The convex hull object i collides as (meshes), or null.
   const ConvexHull* hull(int i) const;
+  /// Models of at least one object constructed in this process (each builds its shapes' FCL
+  /// objects and hulls): how tests see that a scene's model is built once.
+  static std::uint64_t constructed();
 
   struct Impl;
   const Impl& impl() const { return *impl_; }

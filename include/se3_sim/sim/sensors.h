@@ -27,6 +27,7 @@
 #include "se3_sim/collision/collision.h"
 #include "se3_sim/collision/laser.h"
 #include "se3_sim/dynamics/dynamics.h"
+#include "se3_sim/model/urdf_xml.h"
 
 namespace se3 {
 
@@ -90,6 +91,8 @@ struct SensorSpec {
 /// sensors and plugins: one line each in *warnings naming them. Malformed XML: one warning.
 std::vector<SensorSpec> sensors_from_urdf(const std::string& urdf_xml,
                                           std::vector<std::string>* warnings);
+/// The same from a parsed URDF (one parse for every reader of its tags).
+std::vector<SensorSpec> sensors_from_urdf(const UrdfXml& urdf, std::vector<std::string>* warnings);
 
 /// One reading (preallocated; ready says it is new since the last take()).
 struct SensorReading {

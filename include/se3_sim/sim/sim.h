@@ -323,6 +323,9 @@ class Simulator {
   /// the objects and the constraint system's own contact spheres (which the scene collision
   /// holds). Call after set_objects and set_constraints; resets.
   void set_scene_collision(SceneCollision&& collision);
+  /// set_objects, then set_scene_collision, without building the objects' own collision model
+  /// (and its hulls) that the scene collision replaces: make_simulator's order.
+  void set_objects(const std::vector<SceneObject>& objects, SceneCollision&& collision);
   /// The objects as set, in the order given (static ones included).
   const std::vector<SceneObject>& object_specs() const { return object_specs_; }
   /// The contacts of the last step's end (the collision layer's; empty without objects or a
@@ -548,6 +551,9 @@ class Simulator {
     double size = 0;  ///< smallest extent of its shape (m)
   };
   void note_fast_step(size_t j, double moved);
+  /// set_objects without its constraint rebuild and reset; own_collision: the objects' own
+  /// collision model (none when a scene collision follows).
+  void place_objects(const std::vector<SceneObject>& objects, bool own_collision);
   void reset_objects();
   /// The constraint system the step needs (the scene's, or an empty one for free objects).
   void rebuild_constraints();
@@ -698,6 +704,9 @@ void add_link_wrench_force(const Model& model, const Data& data, int link, const
 /// urdf_xml, or on the scene's robot file) whose names the scene does not use; the URDF's
 /// warnings into *warnings.
 std::vector<SensorSpec> scene_sensors(const Scene& scene, const std::string& urdf_xml,
+                                      std::vector<std::string>* warnings);
+/// The same with the robot's URDF parsed (null: no URDF).
+std::vector<SensorSpec> scene_sensors(const Scene& scene, const UrdfXml* urdf,
                                       std::vector<std::string>* warnings);
 /// The URDF text of a scene's robot: urdf_xml when not empty, else the robot file's text ("" for
 /// chain:N or no robot).

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "se3_sim/model/urdf_xml.h"
 #include "se3_sim/sim/controllers.h"
 
 namespace se3 {
@@ -30,6 +31,8 @@ struct JointTransmission {
 /// Every joint's transmission in a URDF text (one entry per joint of each transmission); none
 /// when the URDF has no <transmission> or cannot be parsed (the URDF parser reports that).
 std::vector<JointTransmission> parse_transmissions(const std::string& urdf_xml);
+/// The same from a parsed URDF (one parse for every reader of its tags).
+std::vector<JointTransmission> parse_transmissions(const UrdfXml& urdf);
 
 /// Throws ControllerError, as gazebo_ros_control's controller manager refuses it ("no matching
 /// hardware interface"), for a controller on a joint whose transmission declares interfaces
