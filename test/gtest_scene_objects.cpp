@@ -502,6 +502,41 @@ int main(int argc, char** argv) {
 // make_simulator builds a scene's collision model (shapes, hulls) once: the scene collision, not
 // first the objects' own model that the scene collision replaced (issue 36). The steps are those
 // of the former order (objects, then the scene collision over them) bit for bit.
+// New constraints in a scene with the scene collision (the simulator node's new initial state):
+// one collision model, not the objects' own and then the scene's; the same steps as that order.
+TEST(SceneCollision, NewConstraintsBuildItOnce) {
+  for (const char* name : {"panda_push.yaml", "ball_on_table.yaml"}) {
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(kRoot + "/config/scenes/" + name);
+    auto once = make_simulator(s);
+    auto twice = make_simulator(s);
+    const GeometryModel none;
+    const GeometryModel* geometry = s.robot_path.empty() ? &none : nullptr;
+    const ConstraintSpec spec = scene_constraints(s, once->model());
+
+    const std::uint64_t before = CollisionModel::constructed();
+    once->set_constraints(spec, scene_collision(s, &once->model(), geometry));
+    EXPECT_EQ(CollisionModel::constructed() - before, 1u);
+    const std::uint64_t before2 = CollisionModel::constructed();
+    twice->set_constraints(spec);
+    twice->set_scene_collision(scene_collision(s, &twice->model(), geometry));
+    EXPECT_EQ(CollisionModel::constructed() - before2, 2u);
+
+    std::size_t touches = 0;
+    for (int k = 0; k < 500; ++k) {
+      ASSERT_TRUE(once->step()) << once->failure();
+      ASSERT_TRUE(twice->step()) << twice->failure();
+      touches += once->contacts().size();
+    }
+    EXPECT_EQ(once->state().q, twice->state().q);
+    EXPECT_EQ(once->state().v, twice->state().v);
+    for (size_t j = 0; j < s.objects.size(); ++j) {
+      EXPECT_EQ(once->objects()[j].pose.p, twice->objects()[j].pose.p) << j;
+    }
+    EXPECT_GT(touches, 0u);
+  }
+}
+
 TEST(SceneCollision, BuiltOnceWithTheFormerSteps) {
   for (const char* name : {"box_stack.yaml", "ball_on_table.yaml", "panda_push.yaml"}) {
     SCOPED_TRACE(name);
@@ -520,7 +555,7 @@ TEST(SceneCollision, BuiltOnceWithTheFormerSteps) {
         scene_collision(s, &twice->model(), s.robot_path.empty() ? &none : nullptr));
     EXPECT_EQ(CollisionModel::constructed() - before2, 2u);
 
-    std::size_t touches = 0;  // contacts over the run: the collision model is in use
+    std::size_t touches = 0;         // contacts over the run: the collision model is in use
     for (int k = 0; k < 500; ++k) {  // 0.5 s: the ball lands on its table
       ASSERT_TRUE(once->step()) << once->failure();
       ASSERT_TRUE(twice->step()) << twice->failure();

@@ -373,15 +373,16 @@ void SimulatorNodeImpl::set_initial_positions(
       // The spec as set here, with the collision geometry ground: {from_collisions} needs.
       se3::Scene as_set = scene_;
       as_set.constraints.joint_limits_given = true;
-      sim_->set_constraints(se3::scene_constraints(as_set, sim_->model(), urdf_xml_));
-      // set_constraints rebuilt the objects' own collision model without the robot's shapes:
-      // the scene collision goes back on after it, as make_simulator orders them (sim.h).
+      se3::ConstraintSpec spec = se3::scene_constraints(as_set, sim_->model(), urdf_xml_);
       if (se3::uses_scene_collision(scene_)) {
+        // With the scene collision (the robot's shapes too) in place of the objects' own model.
         const se3::GeometryModel none;
         const bool robot = !(urdf_xml_.empty() && scene_.robot_path.empty());
-        sim_->set_scene_collision(se3::scene_collision(scene_, &sim_->model(),
-                                                       robot ? nullptr : &none, urdf_xml_,
-                                                       sim_->extra_robot_models()));
+        sim_->set_constraints(
+            spec, se3::scene_collision(scene_, &sim_->model(), robot ? nullptr : &none, urdf_xml_,
+                                       sim_->extra_robot_models()));
+      } else {
+        sim_->set_constraints(spec);
       }
     }
   }

@@ -594,6 +594,16 @@ void Simulator::set_constraints(const ConstraintSpec& spec) {
   reset();
 }
 
+void Simulator::set_constraints(const ConstraintSpec& spec, SceneCollision&& collision) {
+  spec_ = spec;
+  if (!object_specs_.empty()) {
+    const std::vector<SceneObject> objects = object_specs_;
+    set_objects(objects, std::move(collision));  // the objects placed anew, as set_constraints
+    return;
+  }
+  set_scene_collision(std::move(collision));  // rebuilds the constraints and resets
+}
+
 double Simulator::constraint_error() {
   return constraints_ ? constraints_->error(state_) : std::numeric_limits<double>::quiet_NaN();
 }

@@ -296,6 +296,9 @@ class Simulator {
   /// Adds constraints (an empty spec removes them): anchors point_world constraints at the
   /// initial state, projects the initial state onto the constraints and resets.
   void set_constraints(const ConstraintSpec& spec);
+  /// set_constraints, then set_scene_collision, without building the objects' own collision
+  /// model that the scene collision replaces (a node's new initial state in a contact scene).
+  void set_constraints(const ConstraintSpec& spec, SceneCollision&& collision);
   /// nullptr when unconstrained; forces() and report() of the last step.
   const ConstraintSystem* constraints() const { return constraints_.get(); }
   /// Largest constraint error at the current state (ConstraintSystem::error), NaN if none.
