@@ -313,8 +313,7 @@ std::vector<SensorSpec> sensors_from_urdf(const std::string& urdf_xml,
   return sensors_from_urdf(UrdfXml(urdf_xml), warnings);
 }
 
-std::vector<SensorSpec> sensors_from_urdf(const UrdfXml& urdf,
-                                          std::vector<std::string>* warnings) {
+std::vector<SensorSpec> sensors_from_urdf(const UrdfXml& urdf, std::vector<std::string>* warnings) {
   std::vector<SensorSpec> out;
   auto warn = [&](const std::string& w) {
     if (warnings) warnings->push_back(w);
