@@ -39,6 +39,7 @@
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/rendered_sensors.h"
 #include "se3_sim/ros/robot_interfaces.h"
+#include "se3_sim/ros/robot_sensors.h"
 #include "se3_sim/ros/sim_markers.h"
 #include "se3_sim/ros/simulator_config.h"
 #include "se3_sim/ros/world_services.h"
@@ -1069,65 +1070,7 @@ void SimulatorNodeImpl::publish_sensors() {
     std_msgs::Header h;
     h.stamp = use_sim_time_ ? ros::Time(r.stamp) : ros::Time::now();
     h.frame_id = sensor_frames_[i];
-    const se3::SensorSpec& s = sensors_->specs()[i];
-    const double var = s.noise.stddev * s.noise.stddev;
-    if (s.type == se3::SensorType::Imu) {
-      sensor_msgs::Imu msg;
-      msg.header = h;
-      msg.orientation.x = r.orientation.x();
-      msg.orientation.y = r.orientation.y();
-      msg.orientation.z = r.orientation.z();
-      msg.orientation.w = r.orientation.w();
-      msg.angular_velocity.x = r.angular_velocity.x();
-      msg.angular_velocity.y = r.angular_velocity.y();
-      msg.angular_velocity.z = r.angular_velocity.z();
-      msg.linear_acceleration.x = r.linear_acceleration.x();
-      msg.linear_acceleration.y = r.linear_acceleration.y();
-      msg.linear_acceleration.z = r.linear_acceleration.z();
-      for (int k = 0; k < 3; ++k) {
-        msg.orientation_covariance[4 * k] = 0;  // exact
-        msg.angular_velocity_covariance[4 * k] = var;
-        msg.linear_acceleration_covariance[4 * k] = var;
-      }
-      sensor_pubs_[i].publish(msg);
-    } else if (s.type == se3::SensorType::ForceTorque) {
-      geometry_msgs::WrenchStamped msg;
-      msg.header = h;
-      msg.wrench.force.x = r.force.x();
-      msg.wrench.force.y = r.force.y();
-      msg.wrench.force.z = r.force.z();
-      msg.wrench.torque.x = r.torque.x();
-      msg.wrench.torque.y = r.torque.y();
-      msg.wrench.torque.z = r.torque.z();
-      sensor_pubs_[i].publish(msg);
-    } else {
-      se3_sim::ContactsState msg;
-      msg.header = h;
-      msg.header.frame_id = world_frame_;
-      msg.states.resize(r.count);
-      auto vec = [](const se3::Vec3& v) {
-        geometry_msgs::Vector3 o;
-        o.x = v.x();
-        o.y = v.y();
-        o.z = v.z();
-        return o;
-      };
-      for (int k = 0; k < r.count; ++k) {
-        const se3::SensorReading::Touch& t = r.touches[k];
-        se3_sim::ContactState& c = msg.states[k];
-        c.info = "depth " + std::to_string(t.depth) + " m";
-        c.collision1_name = t.self;
-        c.collision2_name = t.other;
-        geometry_msgs::Wrench w;
-        w.force = vec(t.force);
-        c.wrenches.push_back(w);
-        c.total_wrench = w;
-        c.contact_positions.push_back(vec(t.position));
-        c.contact_normals.push_back(vec(t.normal));
-        c.depths.push_back(t.depth);
-      }
-      sensor_pubs_[i].publish(msg);
-    }
+    publish_reading(sensors_->specs()[i], r, h, world_frame_, sensor_pubs_[i]);
   }
 }
 

@@ -20,6 +20,21 @@ namespace se3 {
 
 namespace {
 
+// A scene collision with old's frames and warnings, a ground index and a count of robot frames;
+// its model is set by the caller.
+std::unique_ptr<SceneCollision> collision_like(const SceneCollision& old, int ground,
+                                               int robot_frames) {
+  return std::make_unique<SceneCollision>(SceneCollision{CollisionModel({}, {}),
+                                                         old.robot_bodies,
+                                                         old.free_objects,
+                                                         old.object_frame,
+                                                         {},
+                                                         {},
+                                                         ground,
+                                                         old.warnings,
+                                                         robot_frames});
+}
+
 // A position farther than this from the origin is refused (m): beyond it double precision
 // leaves contact and integration no digits to work with.
 constexpr double kMaxPosition = 1e6;
@@ -748,15 +763,7 @@ void Simulator::with_robot_collision(const RobotSpawn& sp, const GeometryModel& 
     scene_object.push_back(-1);
     body.push_back(-1);
   }
-  auto sc = std::make_unique<SceneCollision>(SceneCollision{CollisionModel({}, {}),
-                                                            old.robot_bodies,
-                                                            old.free_objects,
-                                                            old.object_frame,
-                                                            {},
-                                                            {},
-                                                            ground,
-                                                            old.warnings,
-                                                            old.robot_frames + m.n + 1});
+  auto sc = collision_like(old, ground, old.robot_frames + m.n + 1);
   sc->warnings.insert(sc->warnings.end(), g.warnings.begin(), g.warnings.end());
   try {
     sc->model = CollisionModel(std::move(objects), std::move(opt));
@@ -821,15 +828,7 @@ void Simulator::without_robot_collision(int k, WorldEdit& e) const {
     if (p.first.compare(0, prefix.size(), prefix) != 0) pairs.push_back(p);
   }
   opt.disabled_links = std::move(pairs);
-  auto sc = std::make_unique<SceneCollision>(SceneCollision{CollisionModel({}, {}),
-                                                            old.robot_bodies,
-                                                            old.free_objects,
-                                                            old.object_frame,
-                                                            {},
-                                                            {},
-                                                            ground,
-                                                            old.warnings,
-                                                            old.robot_frames - count});
+  auto sc = collision_like(old, ground, old.robot_frames - count);
   try {
     sc->model = CollisionModel(std::move(objects), std::move(opt));
   } catch (const std::invalid_argument& err) {
