@@ -27,6 +27,16 @@ Camera level_camera() {
   return c;
 }
 
+// VertexArrays::xy from separate x and y.
+std::vector<int32_t> interleave(const std::vector<int32_t>& X, const std::vector<int32_t>& Y) {
+  std::vector<int32_t> xy(2 * X.size());
+  for (std::size_t i = 0; i < X.size(); ++i) {
+    xy[2 * i] = X[i];
+    xy[2 * i + 1] = Y[i];
+  }
+  return xy;
+}
+
 void make_plain(Renderer& r) {
   r.style().grid = false;
   r.style().overlay = false;
@@ -308,7 +318,8 @@ TEST(RenderRaster, AllPathsGiveTheSameBits) {
       X[i + 1] = X[i] + int32_t(rnd() * 64) - 32;
       Y[i + 1] = Y[i] + int32_t(rnd() * 64) - 32;
     }
-    const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), out.data()};
+    const std::vector<int32_t> XY = interleave(X, Y);
+    const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(), out.data()};
     const float rgb[3] = {200.0f, 120.0f, 60.0f};
     for (Framebuffer& fb : fbs) {
       for (int part = 0; part < 2; ++part) {
@@ -411,7 +422,8 @@ TEST(RenderRaster, IndexedFrontEndMatchesTheOtherPaths) {
     static_cast<Calls*>(ctx)->seen.insert(static_cast<Calls*>(ctx)->seen.end(), {a, b, c});
     return 1;
   };
-  const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), out.data()};
+  const std::vector<int32_t> XY = interleave(X, Y);
+  const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(), out.data()};
   std::vector<Framebuffer> fbs;
   std::vector<Calls> calls(paths.size());
   std::vector<std::vector<std::size_t>> drawn(paths.size());
@@ -484,7 +496,8 @@ TEST(RenderRaster, TinyTrianglesGiveTheScalarPathsBits) {
     tiny += ((x1 - 8) >> 4) - ((x0 + 7) >> 4) <= 1 && ((y1 - 8) >> 4) - ((y0 + 7) >> 4) <= 1;
   }
   EXPECT_GT(tiny, std::size_t(nv / 3 * 9 / 10)) << "boxes of at most 2 x 2 pixels";
-  const VertexArrays va{X.data(), Y.data(), Z.data(), KF.data(), KB.data(), nullptr};
+  const std::vector<int32_t> XY = interleave(X, Y);
+  const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(), nullptr};
   for (int paint = 0; paint < 2; ++paint) {
     for (int parts = 1; parts <= 2; ++parts) {
       Framebuffer ref(W, H), avx(W, H);
@@ -549,8 +562,9 @@ TEST(RenderRaster, NullOutcodesDrawAsAllInside) {
       Framebuffer& fb = k == 0 ? with : without;
       fb.set_path(path);
       fb.clear_depth();
-      const VertexArrays va{X.data(),  Y.data(),  Z.data(),
-                            KF.data(), KB.data(), k == 0 ? out.data() : nullptr};
+      const std::vector<int32_t> XY = interleave(X, Y);
+      const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(),
+                            k == 0 ? out.data() : nullptr};
       n[k] = fb.fill_indexed(va, idx.data(), idx.size() / 3, rgb, false, true, RowSet(), nullptr,
                              nullptr);
     }

@@ -99,7 +99,7 @@ struct TextAtlas {
 
 struct Renderer::Impl {
   // Frame buffers of transformed vertices (structure of arrays).
-  std::vector<int32_t> X, Y;
+  std::vector<int32_t> XY;  // x, y of vertex i at 2 i, 2 i + 1
   std::vector<float> Z, KF, KB;
   std::vector<uint8_t> out;
   std::vector<ItemFrame> frames;

@@ -63,8 +63,7 @@ inline float pos(float x) {
 __attribute__((target("avx2"))) std::size_t transform_avx2(
     const RenderMesh& mesh, std::size_t i, std::size_t v1, const float* m, float near, float xlo,
     float xhi, float ylo, float yhi, const float L[3], const float H[3], float ka, float kd,
-    float kh, int32_t* X_, int32_t* Y_, float* Z_, float* KF_, float* KB_, uint8_t* O_,
-    uint8_t& any) {
+    float kh, int32_t* XY_, float* Z_, float* KF_, float* KB_, uint8_t* O_, uint8_t& any) {
   __m256 M[12];
   for (int k = 0; k < 12; ++k) M[k] = _mm256_set1_ps(m[k]);
   const __m256 vnear = _mm256_set1_ps(near), vsub = _mm256_set1_ps(float(kSubpixel));
@@ -108,10 +107,15 @@ __attribute__((target("avx2"))) std::size_t transform_avx2(
     code = _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(front), code), behind);
     codes_or = _mm256_or_si256(codes_or, code);
     const __m256i none = _mm256_cmpeq_epi32(code, _mm256_setzero_si256());
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(X_ + i),
-                        _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sx, vsub))));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(Y_ + i),
-                        _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sy, vsub))));
+    const __m256i ix = _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sx, vsub)));
+    const __m256i iy = _mm256_and_si256(none, _mm256_cvtps_epi32(_mm256_mul_ps(sy, vsub)));
+    // Interleaved: (x0 y0 x1 y1 | x4 y4 x5 y5) and (x2 y2 x3 y3 | x6 y6 x7 y7), halves swapped
+    // into order.
+    const __m256i lo = _mm256_unpacklo_epi32(ix, iy), hi = _mm256_unpackhi_epi32(ix, iy);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(XY_ + 2 * i),
+                        _mm256_permute2x128_si256(lo, hi, 0x20));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(XY_ + 2 * i + 8),
+                        _mm256_permute2x128_si256(lo, hi, 0x31));
     _mm256_storeu_ps(Z_ + i, _mm256_and_ps(front, inv));
     // The eight codes (at most 31) as bytes: c0..c3 and c4..c7 in the halves' low words.
     const __m256i w16 = _mm256_packs_epi32(code, code);
@@ -143,9 +147,8 @@ __attribute__((target("avx2"))) std::size_t transform_avx2(
 }  // namespace
 
 void Renderer::Impl::reserve(std::size_t n) {
-  if (X.size() >= n) return;
-  X.resize(n);
-  Y.resize(n);
+  if (Z.size() >= n) return;
+  XY.resize(2 * n);
   Z.resize(n);
   KF.resize(n);
   KB.resize(n);
@@ -217,8 +220,7 @@ uint8_t Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::s
   const float xlo = float(-kGuard), xhi = float(cam.width + kGuard);
   const float ylo = float(-kGuard), yhi = float(cam.height + kGuard);
   const float sub = float(kSubpixel);
-  int32_t* X_ = X.data() + f.vbase;
-  int32_t* Y_ = Y.data() + f.vbase;
+  int32_t* XY_ = XY.data() + 2 * f.vbase;
   float* Z_ = Z.data() + f.vbase;
   float* KF_ = KF.data() + f.vbase;
   float* KB_ = KB.data() + f.vbase;
@@ -227,8 +229,8 @@ uint8_t Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::s
   uint8_t any = 0;
 #if SE3_PIPE_AVX2
   if (simd && !f.rescale && raster_best_path() == RasterPath::Avx2) {
-    i = transform_avx2(mesh, i, v1, m, near, xlo, xhi, ylo, yhi, f.L, f.H, ka, kd, kh, X_, Y_, Z_,
-                       KF_, KB_, O_, any);
+    i = transform_avx2(mesh, i, v1, m, near, xlo, xhi, ylo, yhi, f.L, f.H, ka, kd, kh, XY_, Z_, KF_,
+                       KB_, O_, any);
   }
 #endif
 #if SE3_PIPE_SSE2
@@ -274,8 +276,8 @@ uint8_t Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::s
       const __m128i none = _mm_cmpeq_epi32(code, _mm_setzero_si128());
       const __m128i ix = _mm_and_si128(none, _mm_cvtps_epi32(_mm_mul_ps(sx, vsub)));
       const __m128i iy = _mm_and_si128(none, _mm_cvtps_epi32(_mm_mul_ps(sy, vsub)));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(X_ + i), ix);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(Y_ + i), iy);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(XY_ + 2 * i), _mm_unpacklo_epi32(ix, iy));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(XY_ + 2 * i + 4), _mm_unpackhi_epi32(ix, iy));
       _mm_storeu_ps(Z_ + i, _mm_and_ps(front, inv));
       alignas(16) int32_t codes[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(codes), code);
@@ -318,8 +320,8 @@ uint8_t Renderer::Impl::transform(const RenderMesh& mesh, std::size_t v0, std::s
       if (sy < ylo) code |= kTop;
       if (sy > yhi) code |= kBottom;
     }
-    X_[i] = code ? 0 : int32_t(std::lrint(sx * sub));
-    Y_[i] = code ? 0 : int32_t(std::lrint(sy * sub));
+    XY_[2 * i] = code ? 0 : int32_t(std::lrint(sx * sub));
+    XY_[2 * i + 1] = code ? 0 : int32_t(std::lrint(sy * sub));
     Z_[i] = front ? inv : 0.0f;
     O_[i] = code;
     any |= code;
@@ -401,8 +403,7 @@ std::size_t Renderer::Impl::triangles(const RenderMesh& mesh, const ItemFrame& f
   if (!f.visible) return 0;
   // No outcodes to test where every vertex is inside the guard band and in front.
   const bool inside = (f.outside[0] | f.outside[1]) == 0;
-  const VertexArrays v{X.data() + f.vbase,  Y.data() + f.vbase,
-                       Z.data() + f.vbase,  KF.data() + f.vbase,
+  const VertexArrays v{XY.data() + 2 * f.vbase, Z.data() + f.vbase, KF.data() + f.vbase,
                        KB.data() + f.vbase, inside ? nullptr : out.data() + f.vbase};
   std::size_t drawn = 0;
   for (const RenderMesh::Run& run : mesh.runs) {

@@ -57,8 +57,7 @@ struct RowSet {
 /// sub-pixel position, inverse depth, the shade of the front and of the back side, and an
 /// outcode (non-zero: outside the near plane or the guard band around the image).
 struct VertexArrays {
-  const int32_t* x;
-  const int32_t* y;
+  const int32_t* xy;  ///< vertex i at x = xy[2 i], y = xy[2 i + 1]: one 8-byte load a vertex
   const float* z;
   const float* kf;
   const float* kb;
