@@ -461,8 +461,99 @@ TEST(RenderRaster, IndexedFrontEndMatchesTheOtherPaths) {
   }
 }
 
+// Two triangles at exactly the same depth on a pixel (coplanar copies with other shades)
+// leave the same bits whatever order they are drawn in: the larger colour wins the tie. Tiny,
+// small and wide triangles, forward and backward, on every path, through fill_indexed and
+// fill_triangle. (With "the first drawn wins" the two orders differ.)
+TEST(RenderRaster, DepthTiesGoToTheLargerColourInAnyOrder) {
+  std::vector<RasterPath> paths = {RasterPath::Scalar};
+  if (raster_has_simd()) paths.push_back(RasterPath::Sse2);
+  if (raster_best_path() == RasterPath::Avx2) paths.push_back(RasterPath::Avx2);
+  const int W = 211, H = 97, nv = 1800;
+  uint32_t seed = 4242u;
+  auto rnd = [&seed]() {  // [0, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  // Vertices nv .. 2 nv - 1 copy 0 .. nv - 1 but for their shade.
+  std::vector<int32_t> X(2 * nv), Y(2 * nv);
+  std::vector<float> Z(2 * nv), KF(2 * nv), KB(2 * nv);
+  for (int i = 0; i < nv; ++i) {
+    const double spread = i % 3 == 0 ? 1.5 : i % 3 == 1 ? 5.0 : 60.0;
+    const int32_t cx = int32_t(rnd() * W * 16), cy = int32_t(rnd() * H * 16);
+    X[i] = i % 3 == 0 || i == 0 ? cx : X[i - 1] + int32_t((rnd() - 0.5) * spread * 16);
+    Y[i] = i % 3 == 0 || i == 0 ? cy : Y[i - 1] + int32_t((rnd() - 0.5) * spread * 16);
+    Z[i] = float(0.5 + 0.01 * rnd());
+    KF[i] = KB[i] = float(rnd());  // both sides alike: fill_triangle below has no sides
+    X[nv + i] = X[i];
+    Y[nv + i] = Y[i];
+    Z[nv + i] = Z[i];
+    KF[nv + i] = KB[nv + i] = float(rnd());
+  }
+  std::vector<uint32_t> fwd;
+  for (int t = 0; t + 2 < nv; t += 3) {
+    fwd.insert(fwd.end(), {uint32_t(t), uint32_t(t + 1), uint32_t(t + 2)});
+    fwd.insert(fwd.end(), {uint32_t(nv + t), uint32_t(nv + t + 1), uint32_t(nv + t + 2)});
+  }
+  std::vector<uint32_t> bwd;
+  for (std::size_t t = fwd.size() / 3; t-- > 0;) {
+    bwd.insert(bwd.end(), {fwd[3 * t], fwd[3 * t + 1], fwd[3 * t + 2]});
+  }
+  const std::vector<int32_t> XY = interleave(X, Y);
+  const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(), nullptr};
+  const float rgb[3] = {220.0f, 160.0f, 90.0f};
+  std::vector<Framebuffer> fbs;
+  for (RasterPath path : paths) {
+    for (const std::vector<uint32_t>* order : {&fwd, &bwd}) {
+      fbs.emplace_back(W, H);
+      Framebuffer& fb = fbs.back();
+      fb.set_path(path);
+      fb.clear_depth();
+      std::fill(fb.color(), fb.color() + W * H, 0x102030u);
+      fb.fill_indexed(va, order->data(), order->size() / 3, rgb, false, true, RowSet(), nullptr,
+                      nullptr);
+    }
+    for (const std::vector<uint32_t>* order : {&fwd, &bwd}) {  // one triangle at a time
+      fbs.emplace_back(W, H);
+      Framebuffer& fb = fbs.back();
+      fb.set_path(path);
+      fb.clear_depth();
+      std::fill(fb.color(), fb.color() + W * H, 0x102030u);
+      for (std::size_t t = 0; t < order->size(); t += 3) {
+        const uint32_t* q = order->data() + t;
+        RasterVertex v[3];
+        for (int k = 0; k < 3; ++k) v[k] = {X[q[k]], Y[q[k]], Z[q[k]], KF[q[k]]};
+        fb.fill_triangle(v[0], v[1], v[2], rgb);
+      }
+    }
+  }
+  for (std::size_t f = 1; f < fbs.size(); ++f) {
+    EXPECT_EQ(std::memcmp(fbs[0].color(), fbs[f].color(), 4 * std::size_t(W) * H), 0)
+        << "colour, frame " << f << " (path " << int(paths[f / 4]) << ", order " << f % 2 << ")";
+    EXPECT_EQ(std::memcmp(fbs[0].depth(), fbs[f].depth(), 4 * std::size_t(W) * H), 0)
+        << "depth, frame " << f;
+  }
+  // There are ties to decide: the originals alone and the copies alone give the same depth
+  // and other colours on many pixels.
+  Framebuffer alone[2] = {Framebuffer(W, H), Framebuffer(W, H)};
+  for (int k = 0; k < 2; ++k) {
+    std::vector<uint32_t> half;
+    for (std::size_t t = 3 * k; t < fwd.size(); t += 6)
+      half.insert(half.end(), &fwd[t], &fwd[t + 3]);
+    alone[k].clear_depth();
+    alone[k].fill_indexed(va, half.data(), half.size() / 3, rgb, false, true, RowSet(), nullptr,
+                          nullptr);
+  }
+  std::size_t tied = 0;
+  for (int i = 0; i < W * H; ++i) {
+    tied += alone[0].depth()[i] > 0 && alone[0].depth()[i] == alone[1].depth()[i] &&
+            alone[0].color()[i] != alone[1].color()[i];
+  }
+  EXPECT_GT(tied, std::size_t(W * H / 10));
+}
+
 // Triangles whose pixel box is at most 2 x 2 pixels (the AVX2 loop computes their pixels' z
-// and colour eight triangles wide, then tests and writes one triangle at a time): many of them
+// and colour eight triangles wide, then tests and writes one pixel at a time): many of them
 // piled on a few pixels, both sides seen, in colour and depth alone, one band or two, give the
 // scalar path's bits.
 TEST(RenderRaster, TinyTrianglesGiveTheScalarPathsBits) {

@@ -55,6 +55,20 @@ inline uint32_t shade(const float rgb[3], float k) {
   return (r << 16) | (g << 8) | b;
 }
 
+// The depth test. A fragment wins if it is nearer (larger inverse depth z), and at the same
+// depth if its colour is the larger number: the result does not depend on the order the
+// triangles come in, so every path may draw them in its own order and still leave the same
+// bits. Without colours, the depth alone.
+inline void fragment(float z, float k, const float rgb[3], float* d, uint32_t* c, bool paint) {
+  if (z > *d) {
+    *d = z;
+    if (paint) *c = shade(rgb, k);
+  } else if (paint && z == *d) {
+    const uint32_t s = shade(rgb, k);
+    if (s > *c) *c = s;
+  }
+}
+
 // Columns [i0, i1] of a row (relative to bx0) where every edge value er[k] + i ex[k] >= 0.
 // Narrow boxes are scanned whole (three divisions cost more than a few pixel tests).
 constexpr int kSpanMin = 12;
@@ -100,16 +114,26 @@ void raster_scalar(const Setup& s, const float rgb[3], const Target& T) {
         continue;
       }
       const float fi = float(i);
-      const float z = zr + s.zx * fi;
-      if (z > drow[i]) {
-        drow[i] = z;
-        if (T.paint) crow[i] = shade(rgb, kr + s.kx * fi);
-      }
+      fragment(zr + s.zx * fi, kr + s.kx * fi, rgb, drow + i, crow + i, T.paint);
     }
   }
 }
 
 #if SE3_RASTER_SSE2
+// shade() four lanes wide.
+inline __m128i shade_sse2(const __m128 c[3], __m128 k) {
+  const __m128 c255 = _mm_set1_ps(255.0f);
+  const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[0], k), c255));
+  const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[1], k), c255));
+  const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[2], k), c255));
+  return _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+}
+// Lanes where a > b as unsigned numbers (the tie rule of fragment()).
+inline __m128 greater_sse2(__m128i a, __m128i b) {
+  const __m128i sign = _mm_set1_epi32(int32_t(0x80000000u));
+  return _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_xor_si128(a, sign), _mm_xor_si128(b, sign)));
+}
+
 // Four pixels at columns x .. x + 3 (relative column ii) of a row: edge lanes e, planes' row
 // values zr, kr.
 inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __m128 kr, __m128 zx,
@@ -118,17 +142,19 @@ inline void group_sse2(__m128i e0, __m128i e1, __m128i e2, int ii, __m128 zr, __
   const __m128 fi = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(ii), _mm_setr_epi32(0, 1, 2, 3)));
   const __m128 z = _mm_add_ps(zr, _mm_mul_ps(zx, fi));
   const __m128 d = _mm_loadu_ps(drow);
-  const __m128 m = _mm_andnot_ps(_mm_castsi128_ps(outside), _mm_cmpgt_ps(z, d));
-  if (!_mm_movemask_ps(m)) return;
-  _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
-  if (!paint) return;
+  const __m128 in = _mm_castsi128_ps(outside);  // set: outside
+  __m128 m = _mm_andnot_ps(in, _mm_cmpgt_ps(z, d));
+  if (!paint) {
+    if (_mm_movemask_ps(m)) _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+    return;
+  }
+  const __m128 tie = _mm_andnot_ps(in, _mm_cmpeq_ps(z, d));
+  if (!_mm_movemask_ps(_mm_or_ps(m, tie))) return;
   const __m128 k = _mm_add_ps(kr, _mm_mul_ps(kx, fi));
-  const __m128 c255 = _mm_set1_ps(255.0f);
-  const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[0], k), c255));
-  const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[1], k), c255));
-  const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(c[2], k), c255));
-  const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+  const __m128i px = shade_sse2(c, k);
   const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+  if (_mm_movemask_ps(tie)) m = _mm_or_ps(m, _mm_and_ps(tie, greater_sse2(px, old)));
+  _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
   const __m128i mi = _mm_castps_si128(m);
   _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
                    _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
@@ -189,6 +215,19 @@ void raster_sse2(const Setup& s, const float rgb[3], const Target& T) {
 #endif
 
 #if SE3_RASTER_AVX2
+SE3_AVX2 inline __m256i shade_avx2(const __m256 c[3], __m256 k) {
+  const __m256 c255 = _mm256_set1_ps(255.0f);
+  const __m256i r = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[0], k), c255));
+  const __m256i g = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[1], k), c255));
+  const __m256i b = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[2], k), c255));
+  return _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+}
+SE3_AVX2 inline __m256 greater_avx2(__m256i a, __m256i b) {
+  const __m256i sign = _mm256_set1_epi32(int32_t(0x80000000u));
+  return _mm256_castsi256_ps(
+      _mm256_cmpgt_epi32(_mm256_xor_si256(a, sign), _mm256_xor_si256(b, sign)));
+}
+
 // raster_sse2 eight pixels wide (the same operations lane by lane, so the same bits); needs
 // W >= 8.
 SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m256 zr, __m256 kr,
@@ -199,18 +238,19 @@ SE3_AVX2 inline void group_avx2(__m256i e0, __m256i e1, __m256i e2, int ii, __m2
       _mm256_add_epi32(_mm256_set1_epi32(ii), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
   const __m256 z = _mm256_add_ps(zr, _mm256_mul_ps(zx, fi));
   const __m256 d = _mm256_loadu_ps(drow);
-  const __m256 m = _mm256_andnot_ps(_mm256_castsi256_ps(outside), _mm256_cmp_ps(z, d, _CMP_GT_OQ));
-  if (!_mm256_movemask_ps(m)) return;
-  _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
-  if (!paint) return;
+  const __m256 in = _mm256_castsi256_ps(outside);  // set: outside
+  __m256 m = _mm256_andnot_ps(in, _mm256_cmp_ps(z, d, _CMP_GT_OQ));
+  if (!paint) {
+    if (_mm256_movemask_ps(m)) _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
+    return;
+  }
+  const __m256 tie = _mm256_andnot_ps(in, _mm256_cmp_ps(z, d, _CMP_EQ_OQ));
+  if (!_mm256_movemask_ps(_mm256_or_ps(m, tie))) return;
   const __m256 k = _mm256_add_ps(kr, _mm256_mul_ps(kx, fi));
-  const __m256 c255 = _mm256_set1_ps(255.0f);
-  const __m256i r = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[0], k), c255));
-  const __m256i g = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[1], k), c255));
-  const __m256i b = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(c[2], k), c255));
-  const __m256i px =
-      _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+  const __m256i px = shade_avx2(c, k);
   const __m256i old = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(crow));
+  if (_mm256_movemask_ps(tie)) m = _mm256_or_ps(m, _mm256_and_ps(tie, greater_avx2(px, old)));
+  _mm256_storeu_ps(drow, _mm256_blendv_ps(d, z, m));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(crow),
                       _mm256_blendv_epi8(old, px, _mm256_castps_si256(m)));
 }
@@ -318,12 +358,9 @@ void small_covered(const Small& q, unsigned covered, const float rgb[3], const T
       const float ff0 = float(q.e[0] + i * q.ex[0] + j * q.ey[0]);
       const float ff1 = float(q.e[1] + i * q.ex[1] + j * q.ey[1]);
       const float ff2 = float(q.e[2] + i * q.ex[2] + j * q.ey[2]);
-      const float z = ff0 * wc + ff1 * wa + ff2 * wb;
       const std::size_t at = std::size_t(y) * T.W + q.bx0 + i;
-      if (z > T.depth[at]) {
-        T.depth[at] = z;
-        if (T.paint) T.color[at] = shade(rgb, ff0 * uc + ff1 * ua + ff2 * ub);
-      }
+      fragment(ff0 * wc + ff1 * wa + ff2 * wb, ff0 * uc + ff1 * ua + ff2 * ub, rgb, T.depth + at,
+               T.color + at, T.paint);
     }
   }
 }
@@ -377,7 +414,7 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
           f1 = _mm_add_epi32(s1, _mm_set1_epi32(q.e[1] - q.t[1])),
           f2 = _mm_add_epi32(s2, _mm_set1_epi32(q.e[2] - q.t[2]));
   const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
-  const __m128 c255 = _mm_set1_ps(255.0f);
+  const __m128 c[3] = {_mm_set1_ps(rgb[0]), _mm_set1_ps(rgb[1]), _mm_set1_ps(rgb[2])};
   for (int j = 0; j < q.h;
        ++j, f0 = _mm_add_epi32(f0, y0), f1 = _mm_add_epi32(f1, y1), f2 = _mm_add_epi32(f2, y2)) {
     const int bits = int(covered >> (4 * j) & 15u);
@@ -392,17 +429,19 @@ void small_sse2(const Small& q, const float rgb[3], const Target& T) {
     const __m128 d = _mm_loadu_ps(drow);
     const __m128 in =
         _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), bit), bit));
-    const __m128 m = _mm_and_ps(in, _mm_cmpgt_ps(z, d));
-    if (!_mm_movemask_ps(m)) continue;
-    _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
-    if (!T.paint) continue;
+    __m128 m = _mm_and_ps(in, _mm_cmpgt_ps(z, d));
+    if (!T.paint) {
+      if (_mm_movemask_ps(m)) _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
+      continue;
+    }
+    const __m128 tie = _mm_and_ps(in, _mm_cmpeq_ps(z, d));
+    if (!_mm_movemask_ps(_mm_or_ps(m, tie))) continue;
     const __m128 k =
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(ff0, uc), _mm_mul_ps(ff1, ua)), _mm_mul_ps(ff2, ub));
-    const __m128i r = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[0]), k), c255));
-    const __m128i g = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[1]), k), c255));
-    const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_set1_ps(rgb[2]), k), c255));
-    const __m128i px = _mm_or_si128(_mm_or_si128(_mm_slli_epi32(r, 16), _mm_slli_epi32(g, 8)), b);
+    const __m128i px = shade_sse2(c, k);
     const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(crow));
+    if (_mm_movemask_ps(tie)) m = _mm_or_ps(m, _mm_and_ps(tie, greater_sse2(px, old)));
+    _mm_storeu_ps(drow, _mm_or_ps(_mm_and_ps(m, z), _mm_andnot_ps(m, d)));
     const __m128i mi = _mm_castps_si128(m);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(crow),
                      _mm_or_si128(_mm_and_si128(mi, px), _mm_andnot_si128(mi, old)));
@@ -454,7 +493,7 @@ SE3_AVX2 void small_avx2(const Small& q, const float rgb[3],
           f1 = _mm256_add_epi32(s1, _mm256_set1_epi32(q.e[1] - q.t[1])),
           f2 = _mm256_add_epi32(s2, _mm256_set1_epi32(q.e[2] - q.t[2]));
   const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-  const __m256 c255 = _mm256_set1_ps(255.0f);
+  const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
   for (int j = 0; j < q.h; j += 2, f0 = _mm256_add_epi32(f0, y0), f1 = _mm256_add_epi32(f1, y1),
            f2 = _mm256_add_epi32(f2, y2)) {
     unsigned bits = covered >> (4 * j) & 255u;
@@ -477,28 +516,26 @@ SE3_AVX2 void small_avx2(const Small& q, const float rgb[3],
         _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(d0)), _mm_loadu_ps(d1), 1);
     const __m256 in = _mm256_castsi256_ps(
         _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(bits)), bit), bit));
-    const __m256 m = _mm256_and_ps(in, _mm256_cmp_ps(z, d, _CMP_GT_OQ));
-    const unsigned mm = unsigned(_mm256_movemask_ps(m));
-    if (!mm) continue;
-    const __m256 dn = _mm256_blendv_ps(d, z, m);
+    __m256 m = _mm256_and_ps(in, _mm256_cmp_ps(z, d, _CMP_GT_OQ));
     if (!T.paint) {
+      const unsigned mm = unsigned(_mm256_movemask_ps(m));
+      const __m256 dn = _mm256_blendv_ps(d, z, m);
       if (mm & 15u) _mm_storeu_ps(d0, _mm256_castps256_ps128(dn));
       if (mm > 15u) _mm_storeu_ps(d1, _mm256_extractf128_ps(dn, 1));
       continue;
     }
+    const __m256 tie = _mm256_and_ps(in, _mm256_cmp_ps(z, d, _CMP_EQ_OQ));
+    if (!_mm256_movemask_ps(_mm256_or_ps(m, tie))) continue;
     const __m256 k = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
                                    _mm256_mul_ps(ff2, ub));
-    const __m256i r =
-        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[0]), k), c255));
-    const __m256i g =
-        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[1]), k), c255));
-    const __m256i b =
-        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(_mm256_set1_ps(rgb[2]), k), c255));
-    const __m256i px =
-        _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(r, 16), _mm256_slli_epi32(g, 8)), b);
+    const __m256i px = shade_avx2(c, k);
     const __m256i old = _mm256_inserti128_si256(
         _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c0))),
         _mm_loadu_si128(reinterpret_cast<const __m128i*>(c1)), 1);
+    if (_mm256_movemask_ps(tie)) m = _mm256_or_ps(m, _mm256_and_ps(tie, greater_avx2(px, old)));
+    const unsigned mm = unsigned(_mm256_movemask_ps(m));
+    if (!mm) continue;
+    const __m256 dn = _mm256_blendv_ps(d, z, m);
     const __m256i cn = _mm256_blendv_epi8(old, px, _mm256_castps_si256(m));
     if (mm & 15u) {
       _mm_storeu_ps(d0, _mm256_castps256_ps128(dn));
@@ -528,8 +565,6 @@ struct Edges {
   int32_t e[3], t[3], ex[3], ey[3];
   int32_t area2;
   float z[3], k[3];
-  int covered;  ///< boxes of at most 2 x 2 pixels: the centres covered as small_scalar finds
-                ///< them; or -1
 };
 
 // The small-triangle path for boxes of at most 4 x 4 pixels, the pixel loops for the rest.
@@ -552,12 +587,7 @@ draw_edges(const Edges& g, const float rgb[3], const Target& T) {
                   {g.z[0], g.z[1], g.z[2]},
                   {g.k[0], g.k[1], g.k[2]},
                   g.area2};
-    // At most 2 x 2 pixels with the coverage known, or one or two pixels: the scalar loop is
-    // cheaper than the vector set-up (same bits).
-    if (g.covered >= 0 && w <= 2 && h <= 2) {
-      if (g.covered) small_covered(q, unsigned(g.covered), rgb, T);
-      return;
-    }
+    // One or two pixels: the scalar loop is cheaper than the vector set-up (same bits).
     if (w * h <= 2) {
       small_scalar(q, rgb, T);
       return;
@@ -655,8 +685,7 @@ draw_boxed(int bx0, int by0, int bx1, int by1, int32_t ax_, int32_t ay_, float a
                 {-kSubpixel * dx0, -kSubpixel * dx1, -kSubpixel * dx2},
                 -area,
                 {az, bz, cz},
-                {ak, bk, ck},
-                -1};
+                {ak, bk, ck}};
   draw_edges<kPath>(g, rgb, T);
 }
 
@@ -778,23 +807,178 @@ SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1
   return _mm256_add_epi32(e, _mm256_xor_si256(top_left, _mm256_cmpeq_epi32(zero, zero)));
 }
 
-// The x and y of one corner of eight triangles (corner k of triangle t at g[3 t], g + 1, g + 2
-// for the others), triangle t in lane t: eight 8-byte loads of (x, y) pairs, split by one
-// shuffle each. (Gathers cost more: 2.27 -> 2.06 ms a 640 x 480 camera frame, medians of five
-// interleaved runs, AMD EPYC.)
+// The x and y of vertices g[0], g[S], ..., g[7 S] in lanes 0 .. 7: eight 8-byte loads of (x, y)
+// pairs, split by one shuffle each. (Gathers cost more: 2.27 -> 2.06 ms a 640 x 480 camera
+// frame, medians of five interleaved runs, AMD EPYC.)
 SE3_AVX2 inline __m128i two_xy(const int32_t* xy, uint32_t i, uint32_t j) {
   return _mm_unpacklo_epi64(
       _mm_loadl_epi64(reinterpret_cast<const __m128i*>(xy + 2 * std::size_t(i))),
       _mm_loadl_epi64(reinterpret_cast<const __m128i*>(xy + 2 * std::size_t(j))));
 }
+template <int S>
 SE3_AVX2 inline void corner_avx2(const int32_t* xy, const uint32_t* g, __m256i& x, __m256i& y) {
   // (t0, t1 | t4, t5) and (t2, t3 | t6, t7), each (x, y).
   const __m256 p = _mm256_castsi256_ps(_mm256_inserti128_si256(
-      _mm256_castsi128_si256(two_xy(xy, g[0], g[3])), two_xy(xy, g[12], g[15]), 1));
+      _mm256_castsi128_si256(two_xy(xy, g[0], g[S])), two_xy(xy, g[4 * S], g[5 * S]), 1));
   const __m256 q = _mm256_castsi256_ps(_mm256_inserti128_si256(
-      _mm256_castsi128_si256(two_xy(xy, g[6], g[9])), two_xy(xy, g[18], g[21]), 1));
+      _mm256_castsi128_si256(two_xy(xy, g[2 * S], g[3 * S])), two_xy(xy, g[6 * S], g[7 * S]), 1));
   x = _mm256_castps_si256(_mm256_shuffle_ps(p, q, _MM_SHUFFLE(2, 0, 2, 0)));
   y = _mm256_castps_si256(_mm256_shuffle_ps(p, q, _MM_SHUFFLE(3, 1, 3, 1)));
+}
+
+// Triangles whose pixel box is at most 2 x 2 pixels (most survivors of a detailed mesh),
+// queued by the front end and drawn eight at a time: the vertices' corners, edges and the
+// four centres' coverage, z and colour in vector lanes (the same operations as small_covered,
+// so the same bits), then each covered centre's depth test one at a time. The queue holds
+// their vertices (a, b, c as listed); drawing them after the triangles that followed them is
+// allowed by the order-free depth test (fragment()).
+struct TinyQueue {
+  alignas(32) uint32_t v[3][16];
+  int n = 0;
+};
+
+// Lanes whose row y is another thread's (RowSet::has false).
+SE3_AVX2 inline __m256i other_band(__m256i y, __m128i shift, __m256i part_mask, __m256i part) {
+  const __m256i mine =
+      _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_sra_epi32(y, shift), part_mask), part);
+  return _mm256_xor_si256(mine, _mm256_cmpeq_epi32(mine, mine));
+}
+
+SE3_AVX2 inline __m256 load8(const float* p, const uint32_t* i) {
+  return _mm256_setr_ps(p[i[0]], p[i[1]], p[i[2]], p[i[3]], p[i[4]], p[i[5]], p[i[6]], p[i[7]]);
+}
+
+// Draws the first n (1..8) queued triangles (the lanes past n repeat the first and draw
+// nothing).
+SE3_AVX2 void tiny_batch(const VertexArrays& v, TinyQueue& q, int n, const float rgb[3],
+                         bool outward, const Target& T) {
+  for (int j = 0; j < 3; ++j) {
+    for (int l = n; l < 8; ++l) q.v[j][l] = q.v[j][0];
+  }
+  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
+  __m256i ax, ay, bx, by, cx, cy;
+  corner_avx2<1>(v.xy, q.v[0], ax, ay);
+  corner_avx2<1>(v.xy, q.v[1], bx, by);
+  corner_avx2<1>(v.xy, q.v[2], cx, cy);
+  // As the front end: area, the box's first centre (the box is within the image), canonical
+  // winding.
+  const __m256i area =
+      _mm256_sub_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(bx, ax), _mm256_sub_epi32(cy, ay)),
+                       _mm256_mullo_epi32(_mm256_sub_epi32(cx, ax), _mm256_sub_epi32(by, ay)));
+  const __m256i minx = _mm256_min_epi32(ax, _mm256_min_epi32(bx, cx));
+  const __m256i maxx = _mm256_max_epi32(ax, _mm256_max_epi32(bx, cx));
+  const __m256i miny = _mm256_min_epi32(ay, _mm256_min_epi32(by, cy));
+  const __m256i maxy = _mm256_max_epi32(ay, _mm256_max_epi32(by, cy));
+  const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
+  const __m256i bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
+  const __m256i bx1 = _mm256_min_epi32(wmax, _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
+  const __m256i by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
+  const __m256i by1 = _mm256_min_epi32(hmax, _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
+  const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
+  const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
+  const __m256i swap = _mm256_cmpgt_epi32(area, zero);
+  const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
+  const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
+  const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
+  const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
+  const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
+  __m256i e0, e1, e2, ex0, ey0, ex1, ey1, ex2, ey2;
+  const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
+  const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
+  const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
+  // Coverage of the centres (i, j), bit i + 2 j; the box's second column and row only where it
+  // has them, the rows only where they are this thread's.
+  __m256i no_col = _mm256_cmpeq_epi32(bx0, bx1), no_row = _mm256_cmpeq_epi32(by0, by1);
+  __m256i no_row0 = zero;
+  if (T.rows.parts > 1) {
+    const __m128i shift = _mm_cvtsi32_si128(T.rows.shift);
+    const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
+    const __m256i part = _mm256_set1_epi32(T.rows.part);
+    no_row0 = other_band(by0, shift, part_mask, part);
+    no_row = _mm256_or_si256(
+        no_row, other_band(_mm256_add_epi32(by0, _mm256_set1_epi32(1)), shift, part_mask, part));
+  }
+  const __m256i live =
+      _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  const __m256i skip0 = _mm256_or_si256(no_row0, _mm256_xor_si256(live, ones));
+  const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
+                u2 = _mm256_add_epi32(t2, ey2);
+  const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), _mm256_or_si256(t2, skip0));
+  const __m256i c10 =
+      _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
+                      _mm256_or_si256(_mm256_add_epi32(t2, ex2), _mm256_or_si256(skip0, no_col)));
+  const __m256i skip1 = _mm256_or_si256(no_row, _mm256_xor_si256(live, ones));
+  const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), _mm256_or_si256(u2, skip1));
+  const __m256i c11 =
+      _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
+                      _mm256_or_si256(_mm256_add_epi32(u2, ex2), _mm256_or_si256(skip1, no_col)));
+  const unsigned in00 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c00))) & 255u;
+  const unsigned in10 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c10))) & 255u;
+  const unsigned in01 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c01))) & 255u;
+  const unsigned in11 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c11))) & 255u;
+  if (!(in00 | in10 | in01 | in11)) return;
+  // z and shade at the vertices in canonical winding (a, then b and c swapped where the
+  // area is positive), the side's shade where the area's sign and the winding say.
+  const __m256 swp = _mm256_castsi256_ps(swap);
+  const __m256 front = _mm256_castsi256_ps(
+      _mm256_xor_si256(_mm256_srai_epi32(area, 31), _mm256_set1_epi32(outward ? 0 : -1)));
+  const __m256 za = load8(v.z, q.v[0]), zb = load8(v.z, q.v[1]), zc = load8(v.z, q.v[2]);
+  const __m256 ka = _mm256_blendv_ps(load8(v.kb, q.v[0]), load8(v.kf, q.v[0]), front);
+  const __m256 kb = _mm256_blendv_ps(load8(v.kb, q.v[1]), load8(v.kf, q.v[1]), front);
+  const __m256 kc = _mm256_blendv_ps(load8(v.kb, q.v[2]), load8(v.kf, q.v[2]), front);
+  const __m256 inv =
+      _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_cvtepi32_ps(_mm256_abs_epi32(area)));
+  const __m256 wa = _mm256_mul_ps(za, inv), wb = _mm256_mul_ps(_mm256_blendv_ps(zb, zc, swp), inv),
+               wc = _mm256_mul_ps(_mm256_blendv_ps(zc, zb, swp), inv);
+  const __m256 ua = _mm256_mul_ps(ka, inv), ub = _mm256_mul_ps(_mm256_blendv_ps(kb, kc, swp), inv),
+               uc = _mm256_mul_ps(_mm256_blendv_ps(kc, kb, swp), inv);
+  const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
+  alignas(32) float zs[4][8];
+  alignas(32) uint32_t cs[4][8];
+  for (int k = 0; k < 4; ++k) {
+    const int i = k & 1, j = k >> 1;
+    __m256i f0 = e0, f1 = e1, f2 = e2;
+    if (i) {
+      f0 = _mm256_add_epi32(f0, ex0);
+      f1 = _mm256_add_epi32(f1, ex1);
+      f2 = _mm256_add_epi32(f2, ex2);
+    }
+    if (j) {
+      f0 = _mm256_add_epi32(f0, ey0);
+      f1 = _mm256_add_epi32(f1, ey1);
+      f2 = _mm256_add_epi32(f2, ey2);
+    }
+    const __m256 ff0 = _mm256_cvtepi32_ps(f0), ff1 = _mm256_cvtepi32_ps(f1),
+                 ff2 = _mm256_cvtepi32_ps(f2);
+    _mm256_store_ps(zs[k],
+                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, wc), _mm256_mul_ps(ff1, wa)),
+                                  _mm256_mul_ps(ff2, wb)));
+    if (T.paint) {
+      const __m256 kk = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
+                                      _mm256_mul_ps(ff2, ub));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(cs[k]), shade_avx2(c, kk));
+    }
+  }
+  alignas(32) int32_t base[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(base),
+                     _mm256_add_epi32(_mm256_mullo_epi32(by0, _mm256_set1_epi32(T.W)), bx0));
+  const unsigned in[4] = {in00, in10, in01, in11};
+  const std::size_t step[4] = {0, 1, std::size_t(T.W), std::size_t(T.W) + 1};
+  for (int k = 0; k < 4; ++k) {
+    for (unsigned m = in[k]; m; m &= m - 1) {
+      const int l = __builtin_ctz(m);
+      const std::size_t at = std::size_t(base[l]) + step[k];
+      float* d = T.depth + at;
+      const float z = zs[k][l];
+      if (z > *d) {
+        *d = z;
+        if (T.paint) T.color[at] = cs[k][l];
+      } else if (T.paint && z == *d && cs[k][l] > T.color[at]) {
+        T.color[at] = cs[k][l];
+      }
+    }
+  }
 }
 
 // The triangle loop for AVX2 with a front end eight triangles wide: the vertices of eight
@@ -809,7 +993,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                                                            bool cull, bool outward, const Target& T,
                                                            ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
-  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const __m256i zero = _mm256_setzero_si256();
   const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
   const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
   const __m256i ext = _mm256_set1_epi32(kMaxExtent);
@@ -820,7 +1004,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
   const __m128i shift = _mm_cvtsi32_si128(T.rows.shift);
   const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
   const __m256i part = _mm256_set1_epi32(T.rows.part);
-  alignas(32) int32_t lanes[18][8];  // the survivors' Edges, lane by lane
+  alignas(32) int32_t lanes[17][8];  // the survivors' Edges, lane by lane
+  TinyQueue tq;
   std::size_t i = 0;
   for (; i + 8 <= count; i += 8) {
     const uint32_t* g = t + 3 * i;
@@ -831,9 +1016,9 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
       }
     }
     __m256i ax, ay, bx, by, cx, cy;
-    corner_avx2(v.xy, g, ax, ay);
-    corner_avx2(v.xy, g + 1, bx, by);
-    corner_avx2(v.xy, g + 2, cx, cy);
+    corner_avx2<3>(v.xy, g, ax, ay);
+    corner_avx2<3>(v.xy, g + 1, bx, by);
+    corner_avx2<3>(v.xy, g + 2, cx, cy);
     const __m256i minx = _mm256_min_epi32(ax, _mm256_min_epi32(bx, cx));
     const __m256i maxx = _mm256_max_epi32(ax, _mm256_max_epi32(bx, cx));
     const __m256i miny = _mm256_min_epi32(ay, _mm256_min_epi32(by, cy));
@@ -897,11 +1082,24 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                          _mm256_and_si256(_mm256_or_si256(c01, one_row),
                                           _mm256_or_si256(c11, _mm256_or_si256(one_col, one_row))));
     const __m256i one = _mm256_set1_epi32(1);
-    const __m256i tiny =
-        _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
-                                            _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one)),
-                            none);
-    pending &= ~(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(tiny))) & ~slow);
+    const __m256i small2 =
+        _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), one),
+                        _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one));  // set: larger
+    const unsigned tiny =
+        ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(small2))) & pending & ~slow;
+    pending &= ~tiny;
+    // The tiny ones covering a centre to the queue, drawn eight at a time.
+    for (unsigned m = tiny & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(none))); m;
+         m &= m - 1) {
+      const int k = __builtin_ctz(m);
+      tq.v[0][tq.n] = g[3 * k];
+      tq.v[1][tq.n] = g[3 * k + 1];
+      tq.v[2][tq.n] = g[3 * k + 2];
+      if (++tq.n == 8) {
+        tiny_batch(v, tq, 8, rgb, outward, T);
+        tq.n = 0;
+      }
+    }
     if (!pending) continue;
     const unsigned front_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(front)));
     const unsigned swap_m = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(swap)));
@@ -922,21 +1120,6 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), ey1);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
-    {
-      // Boxes of at most 2 x 2 pixels: their covered centres as small_scalar's bits (column
-      // i, row j: bit 4 j + i); draw_edges uses them for those boxes only.
-      const __m256i in00 = _mm256_srli_epi32(_mm256_andnot_si256(c00, ones), 31);
-      const __m256i in10 =
-          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c10, one_col), ones), 31);
-      const __m256i in01 =
-          _mm256_srli_epi32(_mm256_andnot_si256(_mm256_or_si256(c01, one_row), ones), 31);
-      const __m256i in11 = _mm256_srli_epi32(
-          _mm256_andnot_si256(_mm256_or_si256(c11, _mm256_or_si256(one_col, one_row)), ones), 31);
-      const __m256i bits =
-          _mm256_or_si256(_mm256_or_si256(in00, _mm256_slli_epi32(in10, 1)),
-                          _mm256_or_si256(_mm256_slli_epi32(in01, 4), _mm256_slli_epi32(in11, 5)));
-      _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[17]), bits);
-    }
     do {
       const int k = __builtin_ctz(pending);
       pending &= pending - 1;
@@ -957,11 +1140,11 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                      {lanes[13][k], lanes[14][k], lanes[15][k]},
                      lanes[16][k],
                      {v.z[a], v.z[q], v.z[r]},
-                     {kk[a], kk[q], kk[r]},
-                     lanes[17][k]};
+                     {kk[a], kk[q], kk[r]}};
       draw_edges<2>(eg, rgb, T);
     } while (pending);
   }
+  if (tq.n) tiny_batch(v, tq, tq.n, rgb, outward, T);
   for (; i < count; ++i) {
     drawn +=
         indexed_one<2>(v, t[3 * i], t[3 * i + 1], t[3 * i + 2], rgb, cull, outward, T, clip, ctx);
