@@ -37,11 +37,14 @@ CameraSensorSpec clamped(CameraSensorSpec s) {
 // lane by lane as the loops in render() (so the same bits), from column 0 while i + 8 <= W;
 // returns where it stopped. The cloud's four fields of eight pixels by two 4 x 4 transposes.
 // rgb8 (when not null, with paint): the row's rgb8 bytes from the colours already loaded, as
-// Framebuffer::copy_rgb8 writes them, exactly 24 bytes a step.
+// Framebuffer::copy_rgb8 writes them, exactly 24 bytes a step; where nothing was drawn (depth
+// 0) the colours are the row's background (bg_left below column split, bg_right from there:
+// the renderer did not restore them).
 __attribute__((target("avx2"))) int cloud_row_avx2(int W, const float* zr, const float* a,
                                                    const uint32_t* cr, bool paint, float b,
                                                    float gb, float gx, float h, float near,
-                                                   float far, float* dr, float* pr, uint8_t* rgb8) {
+                                                   float far, float* dr, float* pr, uint8_t* rgb8,
+                                                   int split, uint32_t bg_left, uint32_t bg_right) {
   const __m256i to_rgb = _mm256_setr_epi8(2, 1, 0, 6, 5, 4, 10, 9, 8, 14, 13, 12, -1, -1, -1, -1, 2,
                                           1, 0, 6, 5, 4, 10, 9, 8, 14, 13, 12, -1, -1, -1, -1);
   const __m256 vnan = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
@@ -49,6 +52,10 @@ __attribute__((target("avx2"))) int cloud_row_avx2(int W, const float* zr, const
   const __m256 vzero = _mm256_setzero_ps(), vone = _mm256_set1_ps(1.0f);
   const __m256 vnh = _mm256_set1_ps(-h), vgx = _mm256_set1_ps(gx), vgb = _mm256_set1_ps(gb);
   const __m256 vb = _mm256_set1_ps(b);
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i vsplit = _mm256_set1_epi32(split);
+  const __m256 vleft = _mm256_castsi256_ps(_mm256_set1_epi32(int32_t(bg_left)));
+  const __m256 vright = _mm256_castsi256_ps(_mm256_set1_epi32(int32_t(bg_right)));
   int i = 0;
   for (; i + 8 <= W; i += 8) {
     const __m256 iz = _mm256_loadu_ps(zr + i);
@@ -61,10 +68,13 @@ __attribute__((target("avx2"))) int cloud_row_avx2(int W, const float* zr, const
     const __m256 zz = _mm256_blendv_ps(vnan, z, ok);
     _mm256_storeu_ps(dr + i, zz);
     const __m256 x = _mm256_mul_ps(va, zz), y = _mm256_mul_ps(vb, zz);
-    const __m256 c =
+    __m256 c =
         paint ? _mm256_castsi256_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(cr + i)))
               : vzero;
     if (rgb8) {
+      const __m256 left = _mm256_castsi256_ps(
+          _mm256_cmpgt_epi32(vsplit, _mm256_add_epi32(_mm256_set1_epi32(i), lane)));
+      c = _mm256_blendv_ps(_mm256_blendv_ps(vright, vleft, left), c, hit);
       const __m256i s = _mm256_shuffle_epi8(_mm256_castps_si256(c), to_rgb);
       const __m128i lo = _mm256_castsi256_si128(s), hi = _mm256_extracti128_si256(s, 1);
       const uint32_t lo2 = uint32_t(_mm_extract_epi32(lo, 2));
@@ -169,16 +179,19 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
   cam.target = oMc.p + oMc.R.col(2);
   cam.up = -oMc.R.col(1);
   renderer_.set_camera(cam);
-  renderer_.style().paint = color_;
-  renderer_.render(oMb, markers);
-  // With depth on the AVX2 path the rgb8 bytes come out of the depth and cloud pass, which
-  // reads the colours anyway (one pass over the frame instead of two).
+  // With depth on the AVX2 path (whole groups of eight a row) the rgb8 bytes come out of the
+  // depth and cloud pass, which reads the colours anyway (one pass over the frame instead of
+  // two) and takes the background's colours where the depth says nothing was drawn: the
+  // renderer need not restore them.
 #if SE3_CAMERA_AVX2
-  const bool fused =
-      color_ && spec_.depth && std::as_const(renderer_).framebuffer().path() == RasterPath::Avx2;
+  const bool fused = color_ && spec_.depth && spec_.width % 8 == 0 &&
+                     std::as_const(renderer_).framebuffer().path() == RasterPath::Avx2;
 #else
   const bool fused = false;
 #endif
+  renderer_.style().paint = color_;
+  renderer_.style().keep_background = !fused;
+  renderer_.render(oMb, markers);
   if (color_ && !fused) renderer_.copy_rgb8(rgb_.data());
   if (!spec_.depth) return;
 
@@ -216,12 +229,11 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
 #if SE3_CAMERA_AVX2
     if (avx2) {
       uint8_t* rgb8 = fused ? rgb_.data() + 3 * row : nullptr;
-      i = cloud_row_avx2(W, zr, a, cr, paint, b, gb, gx, h, near, far, dr, pr, rgb8);
-      for (int x = i; fused && x < W; ++x) {  // the row's last pixels, as copy_rgb8
-        rgb8[3 * x] = uint8_t(cr[x] >> 16);
-        rgb8[3 * x + 1] = uint8_t(cr[x] >> 8);
-        rgb8[3 * x + 2] = uint8_t(cr[x]);
-      }
+      int split = 0;
+      uint32_t left = 0, right = 0;
+      if (fused) r.background_row(j, split, left, right);
+      i = cloud_row_avx2(W, zr, a, cr, paint, b, gb, gx, h, near, far, dr, pr, rgb8, split, left,
+                         right);  // all of the row when fused (W a multiple of 8)
     }
 #endif
 #if defined(__SSE2__)

@@ -110,6 +110,7 @@ struct Renderer::Impl {
   // restored each frame where the last frame drew (`dirty`), with the depth cleared there.
   std::vector<uint32_t> background;
   bool background_ok = false;
+  bool stale_color = false;  // a frame left old colours where it drew nothing
   Mat4 background_P = Mat4::Zero();
   Vec3 background_eye = Vec3::Zero();
   double background_grid[4] = {0, 0, 0, 0};

@@ -199,6 +199,13 @@ uint32_t Renderer::background(int x, int y) const {
   return left == rb.ground_left ? rb.ground : rb.sky;
 }
 
+void Renderer::background_row(int y, int& split, uint32_t& left, uint32_t& right) const {
+  const RowBackground& rb = rows_[std::clamp(y, 0, int(rows_.size()) - 1)];
+  split = rb.split;
+  left = rb.ground_left ? rb.ground : rb.sky;
+  right = rb.ground_left ? rb.sky : rb.ground;
+}
+
 bool Renderer::ground_at(int x, int y) const {
   const RowBackground& rb = rows_[std::clamp(y, 0, int(rows_.size()) - 1)];
   return (x < rb.split) == rb.ground_left;
@@ -371,7 +378,7 @@ void Renderer::frame_part(int phase, int part, int parts) {
           for (int y = t << DirtyTiles::kShift; y < y1; ++y) {
             if (!rows.has(y)) continue;
             const std::size_t at = std::size_t(y) * W + x0;
-            if (style_.paint)
+            if (style_.paint && style_.keep_background)
               std::memcpy(fb_.color() + at, I.background.data() + at, std::size_t(x1 - x0) * 4);
             std::memset(fb_.depth() + at, 0, std::size_t(x1 - x0) * 4);
           }
@@ -437,9 +444,11 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
                               double(style_.grid_lines), style_.paint ? 1.0 : 0.0};
   const std::size_t npix = std::size_t(fb_.width()) * fb_.height();
   if (I.background.size() != npix || I.background_P != cam_.P || I.background_eye != cam_.eye ||
-      !std::equal(grid_sig, grid_sig + 4, I.background_grid)) {
+      !std::equal(grid_sig, grid_sig + 4, I.background_grid) ||
+      (I.stale_color && style_.keep_background)) {
     I.background_ok = false;
   }
+  I.stale_color = !style_.keep_background;
   if (!I.background_ok) {
     I.background.resize(npix);  // allocates only when the image size changes
     I.background_P = cam_.P;

@@ -106,6 +106,11 @@ struct Style {
   /// Colours (sky, ground, grid, shaded triangles); false: the depth buffer alone is drawn (a
   /// depth camera whose colour nobody reads), the same depth bits, the colour buffer stale.
   bool paint = true;
+  /// Restore the background's colours where the last frame drew. False: where this frame draws
+  /// nothing the colour buffer keeps what it held (the depth there is 0, background_row() has
+  /// the colours), which saves a copy a frame for a caller that reads the frame through its
+  /// depth (the camera sensor). The next frame with true redraws the whole background.
+  bool keep_background = true;
 };
 
 /// A triangle mesh as the rasterizer reads it: structure-of-arrays positions and unit normals
@@ -215,6 +220,9 @@ class Renderer {
   Framebuffer& framebuffer();
   /// Sky and ground colours of pixel row y at column x as draw_background() paints them.
   uint32_t background(int x, int y) const;
+  /// Row y's background as draw_background() paints it: colour `left` in columns below
+  /// `split`, `right` from there on.
+  void background_row(int y, int& split, uint32_t& left, uint32_t& right) const;
   /// Whether draw_background() painted pixel (x, y) as ground (else sky).
   bool ground_at(int x, int y) const;
   /// Writes the current frame as PNG; false (and *error) on failure.
