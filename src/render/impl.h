@@ -81,6 +81,7 @@ struct ItemFrame {
   bool visible = false;
   std::size_t vbase = 0;  ///< first vertex in the frame buffers
   Rect rect;              ///< pixels it may cover (its box's image, or all)
+  double depth = 0;       ///< depth of its box's centre: items are drawn nearest first
   /// The outcodes of its vertices or-ed, by the part that transformed them (transform's
   /// caller): all zero, the triangle loops skip the per-triangle outcode test.
   uint8_t outside[2] = {0, 0};
@@ -103,6 +104,7 @@ struct Renderer::Impl {
   std::vector<float> Z, KF, KB;
   std::vector<uint8_t> out;
   std::vector<ItemFrame> frames;
+  std::vector<uint32_t> order;  // the items, nearest first (drawn in this order)
   RenderMesh box, cylinder, sphere, cone;
   TextAtlas atlas;
 

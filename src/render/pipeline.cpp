@@ -160,6 +160,7 @@ bool Renderer::Impl::prepare(const RenderMesh& mesh, const SE3& pose, const Vec3
                              const Eigen::Vector3d& light, std::size_t vbase, ItemFrame& f) const {
   f.visible = false;
   f.vbase = vbase;
+  f.depth = 0;  // a strict weak order for the sort by depth, whatever the item
   if (!pose.R.allFinite() || !pose.p.allFinite() || !scale.allFinite()) return false;
   if (mesh.vertex_count() == 0) return false;
   Mat4 T = Mat4::Identity();
@@ -198,6 +199,10 @@ bool Renderer::Impl::prepare(const RenderMesh& mesh, const SE3& pose, const Vec3
                   std::min(cam.width, int(std::ceil(x1)) + 2),
                   std::min(cam.height, int(std::ceil(y1)) + 2)};
   }
+  f.depth = (f.clip *
+             Vec4(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.5 * (lo.z() + hi.z()), 1.0))
+                .w();
+  if (!std::isfinite(f.depth)) f.depth = 0;
   const int rows[3] = {0, 1, 3};
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) f.m[4 * r + c] = float(f.clip(rows[r], c));

@@ -91,6 +91,7 @@ void Renderer::set_items(std::vector<DrawItem> items) {
   for (const DrawItem& it : items_) total += it.mesh ? it.mesh->vertex_count() : 0;
   impl_->reserve(total);
   impl_->frames.assign(items_.size(), ItemFrame());
+  impl_->order.resize(items_.size());
 }
 
 void Renderer::draw_mesh(const RenderMesh& mesh, const SE3& pose, const Vec3& scale,
@@ -412,7 +413,7 @@ void Renderer::frame_part(int phase, int part, int parts) {
     }
   } else if (phase == 2) {
     std::size_t n = 0;
-    for (std::size_t k = 0; k < items_.size(); ++k) {
+    for (const uint32_t k : I.order) {
       n += I.triangles(*items_[k].mesh, I.frames[k], nullptr, planes_, rows, fb_);
     }
     if (part == 0) {
@@ -474,6 +475,13 @@ void Renderer::render(const std::vector<SE3>& oMb, const std::vector<Marker>& ma
       I.next_dirty.add(f.rect);
     }
   }
+  // Nearest first: nearer triangles then hide more of the farther ones' pixels before they are
+  // shaded. The depth test does not depend on the order, so neither does the image.
+  for (std::size_t k = 0; k < I.order.size(); ++k) I.order[k] = uint32_t(k);
+  std::sort(I.order.begin(), I.order.end(), [&I](uint32_t a, uint32_t b) {
+    return I.frames[a].depth < I.frames[b].depth ||
+           (I.frames[a].depth == I.frames[b].depth && a < b);
+  });
   const int parts = style_.threads >= 2 ? 2 : 1;
   if (parts == 2) {
     I.start(this);
