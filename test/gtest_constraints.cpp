@@ -21,11 +21,7 @@ using namespace se3;
 
 namespace {
 
-#ifdef se3_sim_test::source_dir()
 const std::string kRoot = se3_sim_test::source_dir();
-#else
-const std::string kRoot = ".";
-#endif
 
 std::string path(const std::string& rel) {
   return kRoot + "/" + rel;
