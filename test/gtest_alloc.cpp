@@ -392,6 +392,12 @@ TEST(Alloc, SeveralRobotsStepsAllocateNothing) {
   sim->set_robot_joint_effort(0, 1, 5.0);
   ASSERT_EQ(sim->step_n(3), 3) << sim->failure();
   EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+  // A link wrench on robot 1 (its forces: a buffer of its own, sized once).
+  const int hand = sim->robot_model(1).link_index("panda_hand");
+  ASSERT_GE(hand, 0);
+  sim->apply_robot_link_wrench(1, hand, Vec3::Zero(), Vec6::Constant(0.5), 0.1);
+  EXPECT_EQ(allocations_of([&] { EXPECT_EQ(sim->step_n(200), 200) << sim->failure(); }), 0);
+  EXPECT_EQ(sim->link_wrench_count(), 0);
 }
 
 // A robot spawned from its URDF at run time (world.h RobotSpawn) and deleted again: the steps

@@ -57,6 +57,7 @@ const std::map<std::string, std::string> kHeaderLayer = {
     {"se3_sim/ros/robot_sensors.h", "ros"},
     {"se3_sim/ros/simulator_config.h", "ros"},
     {"se3_sim/ros/sim_markers.h", "ros"},
+    {"se3_sim/ros/controller_states.h", "ros"},
     {"se3_sim/model/gazebo_tags.h", "model"},
     {"se3_sim/model/urdf_xml.h", "model"},
     {"se3_sim/collision/laser.h", "collision"},

@@ -559,3 +559,128 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+namespace {
+
+// Robot b of two_floating() alone, as the node's own robot.
+std::string b_alone() {
+  return "gravity: [0, 0, 0]\nintegrator: rkmk4\ndt: 0.001\n"
+         "robots:\n"
+         "  - name: b\n"
+         "    urdf: data/robots/double_pendulum_simple.urdf\n"
+         "    base: free\n"
+         "    joint_limits: false\n"
+         "    base_pose: {position: [3, 0, 0]}\n"
+         "    base_twist: [0, 0.4, 0, 0, 0.2, 0]\n"
+         "    initial_velocities: {joint1: -1.5}\n";
+}
+
+}  // namespace
+
+// A link wrench on robot k >= 1 acts on robot k's joints and base (J^T w), as the same wrench on
+// the same robot alone: robot 0 does not feel it. Without contact each robot steps on its own;
+// with contact (the scene collision) through robot 0's velocity step.
+TEST(MultiRobot, LinkWrenchesActOnTheirRobot) {
+  auto sim = make_simulator(scene_of(two_floating()));
+  auto plain = make_simulator(scene_of(two_floating()));
+  auto alone = make_simulator(scene_of(b_alone()));
+  const int link2 = sim->robot_model(1).link_index("link2");
+  ASSERT_GE(link2, 0);
+  const Vec3 p(0.01, 0.02, 0.05);
+  Vec6 w;
+  w << 0.05, -0.02, 0.01, 0.3, -0.1, 0.2;
+  sim->apply_robot_link_wrench(1, link2, p, w, 0.1);  // 100 steps
+  alone->apply_link_wrench(alone->model().link_index("link2"), p, w, 0.1);
+  EXPECT_EQ(sim->link_wrench_count(), 1);
+  ASSERT_EQ(sim->step_n(300), 300) << sim->failure();
+  ASSERT_EQ(plain->step_n(300), 300) << plain->failure();
+  ASSERT_EQ(alone->step_n(300), 300) << alone->failure();
+  EXPECT_EQ(sim->link_wrench_count(), 0);  // ran out
+  const State &b = sim->robot_state(1), &b1 = alone->state(), &b0 = plain->robot_state(1);
+  EXPECT_LT((b.v - b1.v).norm(), 1e-12);
+  EXPECT_LT((b.q - b1.q).norm(), 1e-12);
+  EXPECT_LT((b.base.p - b1.base.p).norm(), 1e-12);
+  EXPECT_GT((b.v - b0.v).norm(), 1e-2) << "the wrench did not move robot 1";
+  EXPECT_EQ(sim->robot_state(0).v, plain->robot_state(0).v) << "robot 0 felt robot 1's wrench";
+  EXPECT_EQ(sim->robot_state(0).q, plain->robot_state(0).q);
+  // Refusals, and clearing.
+  EXPECT_THROW(sim->apply_robot_link_wrench(2, 0, p, w, 1), std::invalid_argument);
+  EXPECT_THROW(sim->apply_robot_link_wrench(-1, 0, p, w, 1), std::invalid_argument);
+  EXPECT_THROW(
+      sim->apply_robot_link_wrench(1, static_cast<int>(sim->robot_model(1).links.size()), p, w, 1),
+      std::invalid_argument);
+  sim->apply_robot_link_wrench(1, link2, p, w, -1);
+  sim->clear_link_wrenches(link2);  // robot 0's link of that index: robot 1's stays
+  EXPECT_EQ(sim->link_wrench_count(), 1);
+  sim->clear_link_wrenches();
+  EXPECT_EQ(sim->link_wrench_count(), 0);
+  // A deleted robot's wrenches go with it.
+  sim->apply_robot_link_wrench(1, link2, p, w, -1);
+  sim->delete_model("b");
+  EXPECT_EQ(sim->link_wrench_count(), 0);
+  ASSERT_TRUE(sim->step()) << sim->failure();
+
+  // In a contact scene: a torque about joint 1's axis on robot 1's link1 is joint 1's effort.
+  auto by_effort = make_simulator(scene_of(facing(true, true)));
+  auto by_wrench = make_simulator(scene_of(facing(true, true)));
+  ASSERT_EQ(by_wrench->robot_count(), 2);
+  const int link1 = by_wrench->robot_model(1).link_index("link1");
+  ASSERT_GE(link1, 0);
+  Vec6 torque = Vec6::Zero();
+  torque[0] = 0.2;  // joint1's axis is x, the base unrotated
+  for (Simulator* s : {by_effort.get(), by_wrench.get()}) s->set_robot_joint_effort(0, 1, -0.2);
+  by_effort->set_robot_joint_effort(1, 1, 0.2);
+  by_wrench->apply_robot_link_wrench(1, link1, Vec3::Zero(), torque, -1);
+  bool touched = false;
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(by_effort->step()) << by_effort->failure();
+    ASSERT_TRUE(by_wrench->step()) << by_wrench->failure();
+    touched = touched || by_wrench->constraints()->external_count() > 0;
+  }
+  EXPECT_TRUE(touched);
+  EXPECT_LT((by_wrench->robot_state(1).q - by_effort->robot_state(1).q).norm(), 1e-9);
+  EXPECT_LT((by_wrench->robot_state(0).q - by_effort->robot_state(0).q).norm(), 1e-9);
+  EXPECT_GT(std::abs(by_wrench->robot_state(1).q[0]), 0.05);
+}
+
+// Robot k's potential energy is measured from its own initial configuration, as robot 0's.
+TEST(MultiRobot, EachRobotsPotentialEnergyIsItsOwn) {
+  const std::string text =
+      "gravity: [0, 0, -9.81]\nintegrator: rkmk4\ndt: 0.001\n"
+      "robots:\n"
+      "  - {name: a, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+      " joint_limits: false, initial_positions: {joint1: 0.5}}\n"
+      "  - {name: b, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+      " joint_limits: false, initial_positions: {joint1: 0.5}, base_pose: {position: [0, 1, 3]}}\n";
+  auto sim = make_simulator(scene_of(text));
+  EXPECT_NEAR(sim->robot_potential_energy(1), 0.0, 1e-12);
+  ASSERT_EQ(sim->step_n(200), 200) << sim->failure();
+  const double U0 = sim->robot_potential_energy(0), U1 = sim->robot_potential_energy(1);
+  EXPECT_LT(U0, -1e-3);  // it swung down
+  EXPECT_NEAR(U1, U0, 1e-12);
+  EXPECT_NEAR(sim->robot_kinetic_energy(1) + U1, sim->kinetic_energy() + U0, 1e-12);
+  EXPECT_EQ(sim->robot_potential_energy(0), sim->potential_energy());
+  sim->reset();
+  EXPECT_NEAR(sim->robot_potential_energy(1), 0.0, 1e-12);
+}
+
+// The efforts a robot after the first publishes (NS/joint_states, NS/chain_state) are the first
+// robot's kind: its command plus its joints' damping and friction.
+TEST(MultiRobot, EachRobotsAppliedEffortsCountItsDamping) {
+  auto sim = make_simulator(scene_of(two_floating()));
+  auto alone = make_simulator(scene_of(b_alone()));
+  sim->set_robot_joint_effort(1, 1, 0.5);
+  alone->set_joint_effort(1, 0.5);
+  ASSERT_EQ(sim->step_n(10), 10) << sim->failure();
+  ASSERT_EQ(alone->step_n(10), 10) << alone->failure();
+  VecX e1, e0;
+  sim->robot_applied_joint_efforts(1, e1);
+  alone->applied_joint_efforts(e0);
+  ASSERT_EQ(e1.size(), 2);
+  EXPECT_LT((e1 - e0).norm(), 1e-12);
+  EXPECT_GT(std::abs(e1[0] - 0.5), 1e-3) << "no damping in robot 1's efforts";
+  VecX a;
+  sim->robot_applied_joint_efforts(0, a);
+  sim->applied_joint_efforts(e0);
+  EXPECT_EQ(a, e0);
+}

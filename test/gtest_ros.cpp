@@ -14,6 +14,7 @@
 
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
+#include "se3_sim/ros/robot_interfaces.h"
 #include "se3_sim/sim/sim.h"
 #include "source_paths.h"
 
@@ -391,4 +392,35 @@ TEST(Tf, TreeAsRobotStatePublisher) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// simulator/apply_wrench's link names: the first robot's bare, another robot's as its TF frame
+// NS/LINK (its namespace, else its name).
+TEST(Tf, LinksOfEveryRobotByTheirFrameNames) {
+  const se3::Scene sc = se3::parse_scene(
+      "gravity: [0, 0, 0]\nrobots:\n"
+      "  - {name: ur5, urdf: data/robots/ur5_robot.urdf, base: fixed}\n"
+      "  - {name: panda, urdf: data/robots/panda.urdf, namespace: right, base: fixed,"
+      " base_pose: {position: [1, 0, 0]}}\n"
+      "  - {name: p2, urdf: data/robots/double_pendulum_simple.urdf, base: fixed,"
+      " base_pose: {position: [-1, 0, 0]}}\n",
+      kSource, "three.yaml");
+  auto sim = se3::make_simulator(sc);
+  ASSERT_EQ(sim->robot_count(), 3);
+  int robot = -2, link = -2;
+  ASSERT_TRUE(se3_ros::find_robot_link(*sim, "tool0", robot, link));
+  EXPECT_EQ(robot, 0);
+  EXPECT_EQ(link, sim->model().link_index("tool0"));
+  ASSERT_TRUE(se3_ros::find_robot_link(*sim, "right/panda_link4", robot, link));
+  EXPECT_EQ(robot, 1);
+  EXPECT_EQ(link, sim->robot_model(1).link_index("panda_link4"));
+  ASSERT_TRUE(se3_ros::find_robot_link(*sim, "p2/link2", robot, link));  // no namespace: name
+  EXPECT_EQ(robot, 2);
+  EXPECT_EQ(link, sim->robot_model(2).link_index("link2"));
+  for (const char* bad : {"panda_link4", "panda/panda_link4", "right/", "right/tool0", "p2/",
+                          "nobody/link2", "", "/right/panda_link4"}) {
+    EXPECT_FALSE(se3_ros::find_robot_link(*sim, bad, robot, link)) << bad;
+    EXPECT_EQ(robot, -1) << bad;
+    EXPECT_EQ(link, -1) << bad;
+  }
 }

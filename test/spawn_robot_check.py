@@ -5,7 +5,9 @@ services", docs/multi_robot.md).
 A fixed UR5 runs (publish_rate 50 Hz). Checks: a malformed URDF, a name in use and a non-finite
 pose are refused naming the field, changing nothing; the Panda spawned from the parameter
 panda_description (entity_resource.uri param:NAME) has its TF frames panda/LINK (under the world
-frame, none on /tf_static) and panda/joint_states within 0.5 s of the reply, while the UR5's
+frame, none on /tf_static) and panda/joint_states within 0.5 s of the reply (and
+panda/chain_state with the same joints; simulator/apply_wrench takes its links as panda/LINK),
+while the UR5's
 joint_states have no gap longer than two periods; the world services and topics see it
 (get_entities: a robot with its namespace; get and set its state; model_states, link_states,
 sim_stats); deleting it stops its frames and joint_states and unadvertises its topics; the spawn
@@ -22,8 +24,9 @@ import rospy
 import rostest
 from geometry_msgs.msg import Pose, PoseStamped
 from sensor_msgs.msg import JointState
-from se3_sim.msg import EntityCategory, LinkStates, ModelStates, Resource, Result, SimStats
-from se3_sim.srv import (DeleteEntity, GetEntities, GetEntityState, ResetSimulation,
+from se3_sim.msg import (ChainState, EntityCategory, LinkStates, ModelStates, Resource, Result,
+                         SimStats)
+from se3_sim.srv import (ApplyWrench, ApplyWrenchRequest, DeleteEntity, GetEntities, GetEntityState, ResetSimulation,
                          ResetSimulationRequest, SetEntityState, SpawnEntity, SpawnEntityResponse)
 from tf2_msgs.msg import TFMessage
 
@@ -47,10 +50,12 @@ class SpawnRobotTest(unittest.TestCase):
         cls.tf_at = {}  # child frame -> wall time of its last /tf transform
         cls.tf_parent = {}
         cls.static_children = set()
-        cls.models = cls.links = cls.stats = None
+        cls.models = cls.links = cls.stats = cls.chain = cls.js = None
         rospy.Subscriber("joint_states", JointState, cls.on_ur5, queue_size=100)
         for ns in ("panda", "arm2"):
             rospy.Subscriber(ns + "/joint_states", JointState, cls.on_js, ns, queue_size=10)
+        rospy.Subscriber("panda/joint_states", JointState, cls.on_attr, "js", queue_size=10)
+        rospy.Subscriber("panda/chain_state", ChainState, cls.on_attr, "chain", queue_size=10)
         rospy.Subscriber("/tf", TFMessage, cls.on_tf, queue_size=200)
         rospy.Subscriber("/tf_static", TFMessage, cls.on_static, queue_size=10)
         rospy.Subscriber("model_states", ModelStates, cls.on_attr, "models", queue_size=10)
@@ -65,6 +70,7 @@ class SpawnRobotTest(unittest.TestCase):
         cls.entities = srv("get_entities", GetEntities)
         cls.get = srv("get_entity_state", GetEntityState)
         cls.set = srv("set_entity_state", SetEntityState)
+        cls.apply = srv("apply_wrench", ApplyWrench)
 
     @classmethod
     def on_ur5(cls, msg):
@@ -179,6 +185,14 @@ class SpawnRobotTest(unittest.TestCase):
         with self.lock:
             self.assertFalse([c for c in self.static_children if c.startswith("panda/")])
         self.assertIn("<robot", rospy.get_param("/panda/robot_description"))
+        # Its chain_state, and wrenches on its links by their frame names.
+        self.assertTrue(self.wait_for(lambda: self.chain is not None and self.js is not None,
+                                      5.0))
+        with self.lock:
+            self.assertEqual(list(self.chain.name), list(self.js.name))
+            self.assertEqual(self.chain.header.frame_id, "world")
+        w = self.apply(ApplyWrenchRequest(link="panda/panda_hand", duration=0.01))
+        self.assertTrue(w.success, w.message)
         # The world services and topics see it.
         names = self.names()
         self.assertEqual(names["panda"], (EntityCategory.CATEGORY_ROBOT, "panda"))
@@ -228,6 +242,9 @@ class SpawnRobotTest(unittest.TestCase):
         self.assertFalse(late_js)
         topics = [t for t, _ in rospy.get_published_topics()]
         self.assertNotIn("/panda/joint_states", topics)
+        self.assertNotIn("/panda/chain_state", topics)
+        w = self.apply(ApplyWrenchRequest(link="panda/panda_hand", duration=0.01))
+        self.assertFalse(w.success)
         self.assertFalse(rospy.has_param("/panda/robot_description"))
         self.assertTrue(self.wait_for(lambda: self.models is not None and
                                       "panda" not in self.models.name, 5.0))

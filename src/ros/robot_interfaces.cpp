@@ -10,8 +10,10 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "se3_sim/ChainState.h"
 #include "se3_sim/JointTorques.h"
 #include "se3_sim/model/limits.h"
+#include "se3_sim/ros/controller_states.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/robot_sensors.h"
@@ -30,11 +32,13 @@ struct RobotInterfaces::Robot {
   se3::Model tf_model;  ///< its links named NS/LINK
   JointTable joints;
   TfTree tree;
-  ros::Publisher joint_pub;
+  ros::Publisher joint_pub, chain_pub;
   ros::Subscriber cmd_sub;
   std::vector<ros::Subscriber> ctl_subs;
   TorqueCommand torque;
   sensor_msgs::JointState js;
+  se3_sim::ChainState cs;
+  std::unique_ptr<ControllerStates> ctl_states;  ///< null without controllers
   se3::VecX effort;
   std::vector<se3::SE3> links;
   std::vector<geometry_msgs::TransformStamped> tfs;
@@ -44,6 +48,27 @@ struct RobotInterfaces::Robot {
 std::string robot_ros_namespace(const se3::Simulator& sim, int k) {
   const std::string& ns = sim.robot_namespace(k);
   return ns.empty() ? sim.robot_name(k) : ns;
+}
+
+bool find_robot_link(const se3::Simulator& sim, const std::string& frame, int& robot, int& link) {
+  if (sim.robot_count() > 0) {
+    link = sim.robot_model(0).link_index(frame);
+    if (link >= 0) {
+      robot = 0;
+      return true;
+    }
+  }
+  for (int k = 1; k < sim.robot_count(); ++k) {
+    const std::string ns = robot_ros_namespace(sim, k) + "/";
+    if (frame.size() <= ns.size() || frame.compare(0, ns.size(), ns) != 0) continue;
+    link = sim.robot_model(k).link_index(frame.substr(ns.size()));
+    if (link >= 0) {
+      robot = k;
+      return true;
+    }
+  }
+  robot = link = -1;
+  return false;
 }
 
 se3::Model prefixed_links(const se3::Model& model, const std::string& prefix) {
@@ -166,6 +191,7 @@ void RobotInterfaces::connect(Robot& R, const std::vector<std::pair<std::string,
     R.tree.fixed.clear();
   }
   R.joint_pub = rnh.advertise<sensor_msgs::JointState>("joint_states", 10);
+  R.chain_pub = rnh.advertise<se3_sim::ChainState>("chain_state", 10);
   R.cmd_sub = rnh.subscribe<se3_sim::JointTorques>(
       "torque_command", 1000,
       [this, &R](const se3_sim::JointTorques::ConstPtr& msg) {
@@ -240,6 +266,7 @@ void RobotInterfaces::connect(Robot& R, const std::vector<std::pair<std::string,
     ROS_INFO("simulator: robot %s: controller %s (%s) on %s", R.name.c_str(), s.name.c_str(),
              s.type.c_str(), R.ctl_subs.back().getTopic().c_str());
   }
+  if (!specs.empty()) R.ctl_states = std::make_unique<ControllerStates>(rnh, specs, R.name);
   ROS_INFO("simulator: robot %s (%d joints, %s base) on %s/joint_states, TF frames %s/LINK",
            R.name.c_str(), R.model->n, R.model->floating ? "free" : "fixed",
            rnh.getNamespace().c_str(), R.ns.c_str());
@@ -287,15 +314,28 @@ void RobotInterfaces::publish(se3::Simulator& sim, const ros::Time& stamp,
     if (R.k < 1) continue;
     const se3::Model& m = *R.model;
     const se3::State& x = sim.robot_state(R.k);
-    const se3::VecX& a = sim.robot_actuation(R.k);
-    R.effort.resize(m.n);
-    for (int i = 1; i <= m.n; ++i) R.effort[i - 1] = a[m.idx_v(i)];
+    sim.robot_applied_joint_efforts(R.k, R.effort);  // as the first robot's
     fill_joint_state(m, R.joints, x, R.effort, R.js);
     R.js.header.stamp = stamp;
     sim.robot_link_poses(R.k, R.links);
     tf_transforms(R.tf_model, R.tree, R.links, world_frame_, stamp, R.tfs);
+    fill_chain_state(m, R.js, x, sim.robot_kinetic_energy(R.k), sim.robot_potential_energy(R.k),
+                     R.cs);
+    R.cs.header.stamp = stamp;
+    R.cs.header.frame_id = world_frame_;
     R.joint_pub.publish(R.js);
     tf.sendTransform(R.tfs);
+    R.chain_pub.publish(R.cs);
+  }
+}
+
+void RobotInterfaces::publish_controller_states(se3::Simulator& sim, const ros::Time& stamp) {
+  for (const auto& rp : robots_) {
+    Robot& R = *rp;
+    if (R.k < 1 || !R.ctl_states) continue;
+    if (const se3::ControllerSet* set = sim.robot_controllers(R.k)) {
+      R.ctl_states->publish(*set, sim.time(), stamp);
+    }
   }
 }
 

@@ -29,12 +29,12 @@
 #include "se3_sim/ConstraintForces.h"
 #include "se3_sim/ContactsState.h"
 #include "se3_sim/JointTorques.h"
-#include "se3_sim/JointTrajectoryControllerState.h"
 #include "se3_sim/SetState.h"
 #include "se3_sim/SimStats.h"
 #include "se3_sim/Step.h"
 #include "se3_sim/lie/format.h"
 #include "se3_sim/model/limits.h"
+#include "se3_sim/ros/controller_states.h"
 #include "se3_sim/ros/convert.h"
 #include "se3_sim/ros/params.h"
 #include "se3_sim/ros/rendered_sensors.h"
@@ -157,10 +157,7 @@ class SimulatorNodeImpl {
   ros::Publisher joint_pub_, chain_pub_, stats_pub_, marker_pub_, clock_pub_, constraint_pub_;
   ros::Subscriber cmd_sub_;
   std::vector<ros::Subscriber> ctl_subs_;
-  std::vector<ros::Publisher> ctl_state_pubs_;  ///< per controller (trajectory ones: NAME/state)
-  std::vector<double> ctl_state_last_;          ///< simulated time of the last NAME/state
-  std::vector<se3::TrajectoryStatus> ctl_status_;
-  se3_sim::JointTrajectoryControllerState ctl_state_msg_;
+  std::unique_ptr<ControllerStates> ctl_states_;  ///< trajectory controllers' NAME/state
   std::string urdf_text_;  ///< the robot's URDF (transmissions, sensors), "" for chain:N
   std::unique_ptr<se3::UrdfXml> urdf_tree_;  ///< urdf_text_ parsed, for both
   std::vector<ros::ServiceServer> services_;
@@ -512,14 +509,8 @@ bool SimulatorNodeImpl::init() {
       }
       ROS_INFO("simulator: controller %s (%s, %zu joints) on %s", s.name.c_str(), s.type.c_str(),
                s.joints.size(), ctl_subs_.back().getTopic().c_str());
-      ctl_state_pubs_.emplace_back();
-      if (s.kind == se3::ControllerKind::Trajectory) {
-        ctl_state_pubs_.back() =
-            ctl_nh_.advertise<se3_sim::JointTrajectoryControllerState>(s.name + "/state", 10);
-      }
     }
-    ctl_state_last_.assign(set->size(), -1.0);
-    ctl_status_.assign(set->size(), se3::TrajectoryStatus::Idle);
+    ctl_states_ = std::make_unique<ControllerStates>(ctl_nh_, *set, "");
   }
   services_.push_back(nh_.advertiseService("simulator/reset", &SimulatorNodeImpl::on_reset, this));
   services_.push_back(nh_.advertiseService("simulator/pause", &SimulatorNodeImpl::on_pause, this));
@@ -943,11 +934,6 @@ bool SimulatorNodeImpl::on_set_state(se3_sim::SetState::Request& req,
 bool SimulatorNodeImpl::on_apply_wrench(se3_sim::ApplyWrench::Request& req,
                                         se3_sim::ApplyWrench::Response& res) {
   res.success = false;
-  const int link = model_->link_index(req.link);
-  if (link < 0) {
-    res.message = "unknown link '" + req.link + "'";
-    return true;
-  }
   if (!req.reference_frame.empty() && req.reference_frame != world_frame_) {
     res.message = "reference_frame '" + req.reference_frame + "': only the world frame ('" +
                   world_frame_ + "' or '') is taken";
@@ -964,8 +950,13 @@ bool SimulatorNodeImpl::on_apply_wrench(se3_sim::ApplyWrench::Request& req,
     return true;
   }
   std::lock_guard<TurnMutex> lock(mu_);
+  int robot = 0, link = -1;  // robots 1.. by their TF frame names NS/LINK
+  if (!find_robot_link(*sim_, req.link, robot, link)) {
+    res.message = "unknown link '" + req.link + "' (another robot's link: NS/LINK, its TF frame)";
+    return true;
+  }
   try {
-    sim_->apply_link_wrench(link, p, w, req.duration);
+    sim_->apply_robot_link_wrench(robot, link, p, w, req.duration);
   } catch (const std::exception& e) {
     res.message = e.what();
     return true;
@@ -1107,42 +1098,8 @@ void SimulatorNodeImpl::publish_state() {
 
 void SimulatorNodeImpl::publish_controller_states() {
   se3::ControllerSet* set = sim_->controllers();
-  if (!set) return;
-  const double t = sim_->time();
-  for (int c = 0; c < set->size(); ++c) {
-    const se3::ControllerSpec& s = set->spec(c);
-    if (s.kind != se3::ControllerKind::Trajectory) continue;
-    const se3::TrajectoryState& st = set->trajectory_state(c);
-    if (st.status != ctl_status_[c]) {
-      ctl_status_[c] = st.status;
-      const std::string joint =
-          st.status_joint >= 0 ? " (joint " + s.joints[st.status_joint] + ")" : std::string();
-      if (st.status == se3::TrajectoryStatus::PathToleranceViolated ||
-          st.status == se3::TrajectoryStatus::GoalToleranceViolated) {
-        ROS_WARN("simulator: controller %s: %s%s", s.name.c_str(), se3::status_name(st.status),
-                 joint.c_str());
-      } else if (st.status == se3::TrajectoryStatus::Succeeded) {
-        ROS_INFO("simulator: controller %s: trajectory %s", s.name.c_str(),
-                 se3::status_name(st.status));
-      }
-    }
-    if (!(s.state_publish_rate > 0)) continue;
-    if (t >= ctl_state_last_[c] && t - ctl_state_last_[c] < 1.0 / s.state_publish_rate - 1e-9) {
-      continue;
-    }
-    ctl_state_last_[c] = t;
-    se3_sim::JointTrajectoryControllerState& m = ctl_state_msg_;
-    m.header.stamp = stamp();
-    m.joint_names = s.joints;
-    m.desired.positions = st.desired_q;
-    m.desired.velocities = st.desired_v;
-    m.desired.accelerations = st.desired_a;
-    m.actual.positions = st.actual_q;
-    m.actual.velocities = st.actual_v;
-    m.error.positions = st.error_q;
-    m.error.velocities = st.error_v;
-    ctl_state_pubs_[c].publish(m);
-  }
+  if (set && ctl_states_) ctl_states_->publish(*set, sim_->time(), stamp());
+  if (robots_) robots_->publish_controller_states(*sim_, stamp());
 }
 
 void SimulatorNodeImpl::publish_stats_and_markers(Clock::time_point now) {

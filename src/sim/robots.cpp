@@ -91,6 +91,7 @@ std::unique_ptr<Simulator::ExtraRobot> Simulator::make_extra_robot(
   }
   r->command = VecX::Zero(m.nv);
   r->actuation = VecX::Zero(m.nv);
+  r->forces = VecX::Zero(m.nv);
   r->command_until.assign(m.nv, kNever);
   if (!controllers.empty()) r->controllers = std::make_unique<ControllerSet>(m, controllers);
   return r;
@@ -173,6 +174,20 @@ const VecX& Simulator::robot_actuation(int k) const {
   return r.controllers ? r.actuation : r.command;
 }
 
+void Simulator::robot_applied_joint_efforts(int k, VecX& out) {
+  if (k == 0) return applied_joint_efforts(out);
+  const ExtraRobot& r = extra(k);
+  const Model& m = *r.model;
+  out.resize(m.n);
+  const PassiveForces& passive = r.stepper->passive();
+  for (int i = 1; i <= m.n; ++i) {
+    const int iv = m.idx_v(i);
+    const double cmd =
+        r.controllers && r.controllers->controls(i) ? r.actuation[iv] : r.command[iv];
+    out[i - 1] = passive.at(iv, cmd, r.state.v[iv]);
+  }
+}
+
 void Simulator::set_robot_state(int k, const State& s) {
   if (k == 0) return set_state(s);
   ExtraRobot& r = extra(k);
@@ -220,6 +235,22 @@ double Simulator::robot_kinetic_energy(int k) {
   return se3::kinetic_energy(*r.model, r.diag, r.state.base, r.state.q, r.state.v);
 }
 
+double Simulator::robot_potential_energy(int k) {
+  if (k == 0) return potential_energy();
+  ExtraRobot& r = extra(k);
+  return se3::potential_energy(*r.model, r.diag, r.state.base, r.state.q) - r.U0;
+}
+
+const VecX* Simulator::extra_robot_forces(ExtraRobot& r, int k, const VecX* tau) {
+  if (!has_link_wrenches(k)) return tau;
+  r.forces = *tau;  // the same size: no allocation
+  forward_kinematics(*r.model, r.diag, r.state.base, r.state.q);
+  for (const LinkWrench& w : wrenches_) {
+    if (w.robot == k) add_link_wrench_force(*r.model, r.diag, w.link, w.point, w.wrench, r.forces);
+  }
+  return &r.forces;
+}
+
 std::vector<const Model*> Simulator::extra_robot_models() const {
   std::vector<const Model*> out;
   for (const auto& r : extra_) out.push_back(r->model.get());
@@ -240,6 +271,7 @@ void Simulator::prepare_coupled_robots() {
       r.controllers->update(r.state, time_, config_.dt, r.actuation);
       r.tau = &r.actuation;
     }
+    r.tau = extra_robot_forces(r, static_cast<int>(k) + 1, r.tau);
     State& s = extra_states_[k];
     s.base = r.state.base;
     s.q = r.state.q;
@@ -273,8 +305,8 @@ bool Simulator::finish_coupled_robots(StepInfo& info) {
 
 bool Simulator::step_extra_robots() {
   const double h = config_.dt;
-  for (const auto& rp : extra_) {
-    ExtraRobot& r = *rp;
+  for (size_t k = 0; k < extra_.size(); ++k) {
+    ExtraRobot& r = *extra_[k];
     expire_commands(r);
     const VecX* tau = &r.command;
     if (r.controllers) {
@@ -282,6 +314,7 @@ bool Simulator::step_extra_robots() {
       r.controllers->update(r.state, time_, h, r.actuation);
       tau = &r.actuation;
     }
+    tau = extra_robot_forces(r, static_cast<int>(k) + 1, tau);
     const StepInfo info = r.constraints
                               ? constrained_step(*r.constraints, *r.stepper, r.state, *tau, h)
                               : r.stepper->step(r.state, *tau, h);
@@ -311,6 +344,7 @@ void Simulator::reset_extra_robots() {
 
 void Simulator::reset_extra_robot(ExtraRobot& r) {
   r.state = r.initial;
+  r.U0 = se3::potential_energy(*r.model, r.diag, r.state.base, r.state.q);
   r.last_good = r.initial;
   r.command.setZero();
   r.actuation.setZero();
@@ -323,6 +357,13 @@ void Simulator::reset_extra_robot(ExtraRobot& r) {
 
 void Simulator::remove_robot(int k) {
   extra(k);  // checks k
+  // Its link wrenches go with it; the later robots' move down one index.
+  wrenches_.erase(std::remove_if(wrenches_.begin(), wrenches_.end(),
+                                 [k](const LinkWrench& w) { return w.robot == k; }),
+                  wrenches_.end());
+  for (LinkWrench& w : wrenches_) {
+    if (w.robot > k) --w.robot;
+  }
   extra_.erase(extra_.begin() + (k - 1));
   extra_states_.erase(extra_states_.begin() + (k - 1));
   extra_a_.erase(extra_a_.begin() + (k - 1));

@@ -265,7 +265,16 @@ void Simulator::set_controllers(const std::vector<ControllerSpec>& specs) {
 
 void Simulator::apply_link_wrench(int link, const Vec3& point, const Vec6& wrench,
                                   double duration) {
-  if (link < 0 || link >= static_cast<int>(model_->links.size())) {
+  apply_robot_link_wrench(0, link, point, wrench, duration);
+}
+
+void Simulator::apply_robot_link_wrench(int k, int link, const Vec3& point, const Vec6& wrench,
+                                        double duration) {
+  if (k < 0 || k >= robot_count()) {
+    throw std::invalid_argument("robot index " + std::to_string(k) + " out of range (" +
+                                std::to_string(robot_count()) + " robots)");
+  }
+  if (link < 0 || link >= static_cast<int>(robot_model(k).links.size())) {
     throw std::invalid_argument("link index out of range");
   }
   if (!point.allFinite() || !wrench.allFinite() || std::isnan(duration)) {
@@ -276,6 +285,7 @@ void Simulator::apply_link_wrench(int link, const Vec3& point, const Vec6& wrenc
                                 " link wrenches act; clear some first");
   }
   LinkWrench w;
+  w.robot = k;
   w.link = link;
   w.point = point;
   w.wrench = wrench;
@@ -292,9 +302,10 @@ void Simulator::clear_link_wrenches(int link) {
     wrenches_.clear();
     return;
   }
-  wrenches_.erase(std::remove_if(wrenches_.begin(), wrenches_.end(),
-                                 [link](const LinkWrench& w) { return w.link == link; }),
-                  wrenches_.end());
+  wrenches_.erase(
+      std::remove_if(wrenches_.begin(), wrenches_.end(),
+                     [link](const LinkWrench& w) { return w.robot == 0 && w.link == link; }),
+      wrenches_.end());
 }
 
 void add_link_wrench_force(const Model& model, const Data& data, int link, const Vec3& point,
@@ -345,8 +356,15 @@ void Simulator::add_link_wrenches(VecX& tau) {
     add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
   }
   for (const LinkWrench& w : wrenches_) {
-    add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
+    if (w.robot == 0) add_link_wrench_force(*model_, diag_, w.link, w.point, w.wrench, tau);
   }
+}
+
+bool Simulator::has_link_wrenches(int k) const {
+  for (const LinkWrench& w : wrenches_) {
+    if (w.robot == k) return true;
+  }
+  return false;
 }
 
 const VecX& Simulator::step_forces() {
@@ -360,7 +378,8 @@ const VecX& Simulator::step_forces() {
       next_expiry_ = std::min(next_expiry_, command_until_[k]);
     }
   }
-  if (!controllers_ && wrenches_.empty() && weightless_.empty()) return command_;
+  const bool wrenched = !weightless_.empty() || has_link_wrenches(0);
+  if (!controllers_ && !wrenched) return command_;
   const VecX* tau = &command_;
   if (controllers_) {
     if (control_every_ <= 1 || steps_ % control_every_ == 0) {
@@ -372,7 +391,7 @@ const VecX& Simulator::step_forces() {
     }
     tau = &actuation_;
   }
-  if (wrenches_.empty() && weightless_.empty()) return *tau;
+  if (!wrenched) return *tau;
   forces_ = *tau;
   add_link_wrenches(forces_);
   return forces_;

@@ -1,9 +1,9 @@
 // The ROS interface of a simulator's robots 1.. (docs/ros.md "Several robots"; robot 0 is the
 // node's own): per robot, under its namespace NS, the parameter NS/robot_description, the topics
-// NS/joint_states and NS/torque_command, its controllers' NS/NAME/command (a trajectory
-// controller's NS/NAME/state is not published yet), its TF frames NS/LINK (REP 105: its root
-// link NS/ROOT hangs on the world frame; no tf_prefix), and its sensors' topics NS/TOPIC (its
-// robots: entry's sensors: and its URDF's Gazebo sensor tags; robot_sensors.h).
+// NS/joint_states, NS/chain_state and NS/torque_command, its controllers' NS/NAME/command (and a
+// trajectory controller's NS/NAME/state), its TF frames NS/LINK (REP 105: its root link NS/ROOT
+// hangs on the world frame; no tf_prefix), and its sensors' topics NS/TOPIC (its robots: entry's
+// sensors: and its URDF's Gazebo sensor tags; robot_sensors.h).
 #pragma once
 
 #include <geometry_msgs/TransformStamped.h>
@@ -24,6 +24,10 @@ namespace se3_ros {
 std::string robot_ros_namespace(const se3::Simulator& sim, int k);
 /// A copy of model whose link names carry prefix + "/" (prefix "" leaves them), for TF.
 se3::Model prefixed_links(const se3::Model& model, const std::string& prefix);
+/// The robot and link (index into its Model::links) that a TF frame name names: robot 0's links
+/// by their bare names, robot k >= 1's as NS/LINK (NS its robot_ros_namespace). False when no
+/// robot has that link.
+bool find_robot_link(const se3::Simulator& sim, const std::string& frame, int& robot, int& link);
 
 class RobotInterfaces {
  public:
@@ -37,8 +41,11 @@ class RobotInterfaces {
   ~RobotInterfaces();
   /// The fixed joints' transforms of every robot, for /tf_static.
   std::vector<geometry_msgs::TransformStamped> static_transforms(const ros::Time& stamp) const;
-  /// Under the node's lock: every robot's joint_states and /tf.
+  /// Under the node's lock: every robot's joint_states, chain_state and /tf.
   void publish(se3::Simulator& sim, const ros::Time& stamp, tf2_ros::TransformBroadcaster& tf);
+  /// Under the node's lock: every robot's trajectory controllers' NAME/state that is due
+  /// (controller_states.h).
+  void publish_controller_states(se3::Simulator& sim, const ros::Time& stamp);
   /// Under the node's lock, around each Simulator::step: every robot's sensors (after_step
   /// publishes the readings that are ready); reset_sensors after a reset of the simulator.
   void before_step(const se3::Simulator& sim);

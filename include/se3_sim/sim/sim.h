@@ -282,7 +282,13 @@ class Simulator {
   /// base), evaluated at the start of each step. Wrenches add up. Throws std::invalid_argument
   /// (nothing changed) for a bad link, a non-finite value, or more than kMaxLinkWrenches.
   void apply_link_wrench(int link, const Vec3& point, const Vec6& wrench, double duration);
-  /// Removes the wrenches on one link (-1: all).
+  /// apply_link_wrench on robot k's link (an index into robot_model(k).links): J^T wrench on
+  /// robot k's joints and free base. The wrenches of every robot share kMaxLinkWrenches, count
+  /// down together and end with reset(); a deleted robot's go with it. Throws
+  /// std::invalid_argument (nothing changed) for a bad robot index too.
+  void apply_robot_link_wrench(int k, int link, const Vec3& point, const Vec6& wrench,
+                               double duration);
+  /// Removes the wrenches on one link of robot 0 (-1: every wrench, on every robot).
   void clear_link_wrenches(int link = -1);
   int link_wrench_count() const { return static_cast<int>(wrenches_.size()); }
   /// Links that feel no gravity (<gazebo reference="LINK"><gravity>false</gravity>): each
@@ -378,6 +384,9 @@ class Simulator {
   void set_robot_base_wrench(int k, const Vec6& wrench);
   /// Robot k's actuation of the last step (size nv): as actuation() for robot 0.
   const VecX& robot_actuation(int k) const;
+  /// applied_joint_efforts of robot k (size its n): its command (a controlled joint: its
+  /// actuation of the last step) plus its damping and friction.
+  void robot_applied_joint_efforts(int k, VecX& out);
   /// set_state of robot k (same checks).
   void set_robot_state(int k, const State& s);
   /// Robot k's controllers (nullptr without); replaced by set_robot_controllers.
@@ -390,6 +399,9 @@ class Simulator {
   /// Robot k's world spatial momentum and kinetic energy.
   Vec6 robot_momentum(int k);
   double robot_kinetic_energy(int k);
+  /// Robot k's potential energy relative to its initial configuration (as potential_energy()
+  /// for robot 0).
+  double robot_potential_energy(int k);
 
   // ---- world interface (world.h, src/sim/world.cpp; docs/design.md "World interface"). Models
   // are the robot (when the simulator has one: a scene of objects alone has none) and the
@@ -533,11 +545,14 @@ class Simulator {
   /// adds the link wrenches.
   const VecX& step_forces();
   void add_link_wrenches(VecX& tau);
+  /// Whether a link wrench acts on robot k.
+  bool has_link_wrenches(int k) const;
   void count_down_link_wrenches();
   /// The step count from which a command set now no longer acts.
   std::uint64_t command_expiry() const;
 
   struct LinkWrench {
+    int robot = 0;  ///< robot index (robots 1..: remove_robot renumbers)
     int link = 0;
     Vec3 point = Vec3::Zero();
     Vec6 wrench = Vec6::Zero();
@@ -589,6 +604,8 @@ class Simulator {
     /// simulator's command_timeout, as robot 0's), and the least of them.
     std::vector<std::uint64_t> command_until;
     std::uint64_t next_expiry = std::numeric_limits<std::uint64_t>::max();
+    VecX forces;    ///< tau plus its link wrenches (size nv), when some act on it
+    double U0 = 0;  ///< potential energy at its initial state
     Data diag;
     explicit ExtraRobot(const Model& m) : diag(m) {}
   };
@@ -625,6 +642,9 @@ class Simulator {
                                                         const std::vector<bool>& limits) const;
   /// Zeroes robot r's commands that ran out (command_timeout) before a step.
   void expire_commands(ExtraRobot& r) const;
+  /// Robot k >= 1's generalized force of this step: tau, or tau plus its link wrenches in
+  /// r.forces.
+  const VecX* extra_robot_forces(ExtraRobot& r, int k, const VecX* tau);
   /// Rolls robots 1.. back to their last good states.
   void roll_back_extra_robots();
   ExtraRobot& extra(int k) const;
