@@ -617,6 +617,65 @@ TEST(RenderRaster, TinyTrianglesGiveTheScalarPathsBits) {
   }
 }
 
+// Triangles of one to five pixels across the image's right and bottom borders and its corner
+// (their pixel boxes clipped to the image: the AVX2 loop's queues must not draw the columns and
+// rows a box lost), in colour and depth alone, one band or two: the scalar path's bits.
+TEST(RenderRaster, SmallTrianglesAtTheBordersGiveTheScalarPathsBits) {
+  if (raster_best_path() != RasterPath::Avx2) GTEST_SKIP() << "no AVX2 here";
+  const int W = 37, H = 29, nv = 3000;
+  uint32_t seed = 99u;
+  auto rnd = [&seed]() {  // [0, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  std::vector<int32_t> X(nv), Y(nv);
+  std::vector<float> Z(nv), KF(nv), KB(nv);
+  for (int i = 0; i < nv; ++i) {
+    const int c = i / 3, side = c % 3;  // right border, bottom border, the corner
+    const double cx = side == 1 ? rnd() * W : W - 1.5 + 3 * rnd();
+    const double cy = side == 0 ? rnd() * H : H - 1.5 + 3 * rnd();
+    const double extent = 1 + 4 * rnd();
+    X[i] = int32_t(16 * (cx + extent * (rnd() - 0.5)));
+    Y[i] = int32_t(16 * (cy + extent * (rnd() - 0.5)));
+    Z[i] = float(0.5 + rnd());
+    KF[i] = float(2 * rnd());
+    KB[i] = float(rnd());
+  }
+  std::vector<uint32_t> idx(nv);
+  for (int i = 0; i < nv; ++i) idx[std::size_t(i)] = uint32_t(i);
+  const float rgb[3] = {30.0f, 200.0f, 140.0f};
+  const std::vector<int32_t> XY = interleave(X, Y);
+  const VertexArrays va{XY.data(), Z.data(), KF.data(), KB.data(), nullptr};
+  std::size_t covered = 0;
+  for (int paint = 0; paint < 2; ++paint) {
+    for (int parts = 1; parts <= 2; ++parts) {
+      Framebuffer ref(W, H), avx(W, H);
+      for (int k = 0; k < 2; ++k) {
+        Framebuffer& fb = k == 0 ? ref : avx;
+        fb.set_path(k == 0 ? RasterPath::Scalar : RasterPath::Avx2);
+        fb.set_paint(paint == 1);
+        fb.clear_depth();
+        std::fill(fb.color(), fb.color() + W * H, 0x123456u);
+        for (int part = 0; part < parts; ++part) {
+          RowSet rows;
+          rows.shift = 2;
+          rows.parts = parts;
+          rows.part = part;
+          fb.fill_indexed(va, idx.data(), std::size_t(nv / 3), rgb, false, true, rows, nullptr,
+                          nullptr);
+        }
+      }
+      EXPECT_EQ(std::memcmp(ref.depth(), avx.depth(), 4 * std::size_t(W) * H), 0)
+          << "depth, paint " << paint << ", parts " << parts;
+      EXPECT_EQ(std::memcmp(ref.color(), avx.color(), 4 * std::size_t(W) * H), 0)
+          << "colour, paint " << paint << ", parts " << parts;
+      for (int y = 0; y < H; ++y)
+        covered += ref.depth()[y * W] > 0 || ref.depth()[y * W + W - 1] > 0;
+    }
+  }
+  EXPECT_GT(covered, std::size_t(4 * H / 2)) << "the right border is drawn on";
+}
+
 // VertexArrays without outcodes (out null: every vertex inside) draw as with all-zero
 // outcodes, on every path, in the eight-wide front end and its one-at-a-time tail.
 TEST(RenderRaster, NullOutcodesDrawAsAllInside) {

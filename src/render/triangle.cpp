@@ -826,16 +826,22 @@ SE3_AVX2 inline void corner_avx2(const int32_t* xy, const uint32_t* g, __m256i& 
   y = _mm256_castps_si256(_mm256_shuffle_ps(p, q, _MM_SHUFFLE(3, 1, 3, 1)));
 }
 
-// Triangles whose pixel box is at most 2 x 2 pixels (most survivors of a detailed mesh),
-// queued by the front end and drawn eight at a time: the vertices' corners, edges and the
-// four centres' coverage, z and colour in vector lanes (the same operations as small_covered,
-// so the same bits), then each covered centre's depth test one at a time. The queue holds
-// their vertices (a, b, c as listed); drawing them after the triangles that followed them is
-// allowed by the order-free depth test (fragment()).
-struct TinyQueue {
-  alignas(32) uint32_t v[3][16];
+// Triangles whose pixel box is at most N x N pixels (N = 2: most survivors of a detailed mesh;
+// N = 4: most of the rest), queued by the front end and drawn eight at a time: the vertices'
+// corners, edges and the centres' coverage, z and colour in vector lanes (the same operations
+// as small_covered and small_avx2, so the same bits), then each covered centre's depth test
+// one at a time. The queue holds their vertices (a, b, c as listed); drawing them after the
+// triangles that followed them is allowed by the order-free depth test (fragment()).
+struct BoxQueue {
+  alignas(32) uint32_t v[3][8];
   int n = 0;
 };
+inline void push(BoxQueue& q, const uint32_t* abc) {
+  q.v[0][q.n] = abc[0];
+  q.v[1][q.n] = abc[1];
+  q.v[2][q.n] = abc[2];
+  ++q.n;
+}
 
 // Lanes whose row y is another thread's (RowSet::has false).
 SE3_AVX2 inline __m256i other_band(__m256i y, __m128i shift, __m256i part_mask, __m256i part) {
@@ -848,14 +854,15 @@ SE3_AVX2 inline __m256 load8(const float* p, const uint32_t* i) {
   return _mm256_setr_ps(p[i[0]], p[i[1]], p[i[2]], p[i[3]], p[i[4]], p[i[5]], p[i[6]], p[i[7]]);
 }
 
-// Draws the first n (1..8) queued triangles (the lanes past n repeat the first and draw
-// nothing).
-SE3_AVX2 void tiny_batch(const VertexArrays& v, TinyQueue& q, int n, const float rgb[3],
-                         bool outward, const Target& T) {
+// Draws the first n (1..8) queued triangles, boxes of at most N x N pixels (the lanes past n
+// repeat the first and draw nothing).
+template <int N>
+SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float rgb[3], bool outward,
+                        const Target& T) {
   for (int j = 0; j < 3; ++j) {
     for (int l = n; l < 8; ++l) q.v[j][l] = q.v[j][0];
   }
-  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const __m256i zero = _mm256_setzero_si256();
   const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
   __m256i ax, ay, bx, by, cx, cy;
   corner_avx2<1>(v.xy, q.v[0], ax, ay);
@@ -887,37 +894,44 @@ SE3_AVX2 void tiny_batch(const VertexArrays& v, TinyQueue& q, int n, const float
   const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
   const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
   const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
-  // Coverage of the centres (i, j), bit i + 2 j; the box's second column and row only where it
-  // has them, the rows only where they are this thread's.
-  __m256i no_col = _mm256_cmpeq_epi32(bx0, bx1), no_row = _mm256_cmpeq_epi32(by0, by1);
-  __m256i no_row0 = zero;
-  if (T.rows.parts > 1) {
-    const __m128i shift = _mm_cvtsi32_si128(T.rows.shift);
-    const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
-    const __m256i part = _mm256_set1_epi32(T.rows.part);
-    no_row0 = other_band(by0, shift, part_mask, part);
-    no_row = _mm256_or_si256(
-        no_row, other_band(_mm256_add_epi32(by0, _mm256_set1_epi32(1)), shift, part_mask, part));
+  // Coverage of the centres (i, j) (centre i + N j): only columns and rows the box has, rows
+  // only where they are this thread's, lanes only up to n.
+  const __m256i dead =
+      _mm256_cmpgt_epi32(_mm256_setr_epi32(1, 2, 3, 4, 5, 6, 7, 8), _mm256_set1_epi32(n));
+  const __m256i wide = _mm256_sub_epi32(bx1, bx0), tall = _mm256_sub_epi32(by1, by0);
+  __m128i shift = _mm_setzero_si128();
+  __m256i part_mask = zero, part = zero;
+  const bool bands = T.rows.parts > 1;
+  if (bands) {
+    shift = _mm_cvtsi32_si128(T.rows.shift);
+    part_mask = _mm256_set1_epi32(T.rows.parts - 1);
+    part = _mm256_set1_epi32(T.rows.part);
   }
-  const __m256i live =
-      _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-  const __m256i skip0 = _mm256_or_si256(no_row0, _mm256_xor_si256(live, ones));
-  const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
-                u2 = _mm256_add_epi32(t2, ey2);
-  const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), _mm256_or_si256(t2, skip0));
-  const __m256i c10 =
-      _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
-                      _mm256_or_si256(_mm256_add_epi32(t2, ex2), _mm256_or_si256(skip0, no_col)));
-  const __m256i skip1 = _mm256_or_si256(no_row, _mm256_xor_si256(live, ones));
-  const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), _mm256_or_si256(u2, skip1));
-  const __m256i c11 =
-      _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
-                      _mm256_or_si256(_mm256_add_epi32(u2, ex2), _mm256_or_si256(skip1, no_col)));
-  const unsigned in00 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c00))) & 255u;
-  const unsigned in10 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c10))) & 255u;
-  const unsigned in01 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c01))) & 255u;
-  const unsigned in11 = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(c11))) & 255u;
-  if (!(in00 | in10 | in01 | in11)) return;
+  unsigned in[N * N];
+  unsigned any = 0;
+  __m256i u0 = t0, u1 = t1, u2 = t2;  // row j's first centre
+  for (int j = 0; j < N; ++j) {
+    __m256i skip = _mm256_or_si256(dead, _mm256_cmpgt_epi32(_mm256_set1_epi32(j), tall));
+    if (bands) {
+      skip = _mm256_or_si256(
+          skip, other_band(_mm256_add_epi32(by0, _mm256_set1_epi32(j)), shift, part_mask, part));
+    }
+    __m256i w0 = u0, w1 = u1, w2 = u2;
+    for (int i = 0; i < N; ++i) {
+      const __m256i out = _mm256_or_si256(
+          _mm256_or_si256(_mm256_or_si256(w0, w1), w2),
+          i ? _mm256_or_si256(skip, _mm256_cmpgt_epi32(_mm256_set1_epi32(i), wide)) : skip);
+      in[i + N * j] = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(out))) & 255u;
+      any |= in[i + N * j];
+      w0 = _mm256_add_epi32(w0, ex0);
+      w1 = _mm256_add_epi32(w1, ex1);
+      w2 = _mm256_add_epi32(w2, ex2);
+    }
+    u0 = _mm256_add_epi32(u0, ey0);
+    u1 = _mm256_add_epi32(u1, ey1);
+    u2 = _mm256_add_epi32(u2, ey2);
+  }
+  if (!any) return;
   // z and shade at the vertices in canonical winding (a, then b and c swapped where the
   // area is positive), the side's shade where the area's sign and the winding say.
   const __m256 swp = _mm256_castsi256_ps(swap);
@@ -934,41 +948,42 @@ SE3_AVX2 void tiny_batch(const VertexArrays& v, TinyQueue& q, int n, const float
   const __m256 ua = _mm256_mul_ps(ka, inv), ub = _mm256_mul_ps(_mm256_blendv_ps(kb, kc, swp), inv),
                uc = _mm256_mul_ps(_mm256_blendv_ps(kc, kb, swp), inv);
   const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
-  alignas(32) float zs[4][8];
-  alignas(32) uint32_t cs[4][8];
-  for (int k = 0; k < 4; ++k) {
-    const int i = k & 1, j = k >> 1;
-    __m256i f0 = e0, f1 = e1, f2 = e2;
-    if (i) {
+  alignas(32) float zs[N * N][8];
+  alignas(32) uint32_t cs[N * N][8];
+  __m256i r0 = e0, r1 = e1, r2 = e2;  // row j's first centre, without the top-left rule
+  for (int j = 0; j < N; ++j) {
+    __m256i f0 = r0, f1 = r1, f2 = r2;
+    for (int i = 0; i < N; ++i) {
+      const int k = i + N * j;
+      if (in[k]) {
+        const __m256 ff0 = _mm256_cvtepi32_ps(f0), ff1 = _mm256_cvtepi32_ps(f1),
+                     ff2 = _mm256_cvtepi32_ps(f2);
+        _mm256_store_ps(zs[k],
+                        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, wc), _mm256_mul_ps(ff1, wa)),
+                                      _mm256_mul_ps(ff2, wb)));
+        if (T.paint) {
+          const __m256 kk =
+              _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
+                            _mm256_mul_ps(ff2, ub));
+          _mm256_store_si256(reinterpret_cast<__m256i*>(cs[k]), shade_avx2(c, kk));
+        }
+      }
       f0 = _mm256_add_epi32(f0, ex0);
       f1 = _mm256_add_epi32(f1, ex1);
       f2 = _mm256_add_epi32(f2, ex2);
     }
-    if (j) {
-      f0 = _mm256_add_epi32(f0, ey0);
-      f1 = _mm256_add_epi32(f1, ey1);
-      f2 = _mm256_add_epi32(f2, ey2);
-    }
-    const __m256 ff0 = _mm256_cvtepi32_ps(f0), ff1 = _mm256_cvtepi32_ps(f1),
-                 ff2 = _mm256_cvtepi32_ps(f2);
-    _mm256_store_ps(zs[k],
-                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, wc), _mm256_mul_ps(ff1, wa)),
-                                  _mm256_mul_ps(ff2, wb)));
-    if (T.paint) {
-      const __m256 kk = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ff0, uc), _mm256_mul_ps(ff1, ua)),
-                                      _mm256_mul_ps(ff2, ub));
-      _mm256_store_si256(reinterpret_cast<__m256i*>(cs[k]), shade_avx2(c, kk));
-    }
+    r0 = _mm256_add_epi32(r0, ey0);
+    r1 = _mm256_add_epi32(r1, ey1);
+    r2 = _mm256_add_epi32(r2, ey2);
   }
   alignas(32) int32_t base[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(base),
                      _mm256_add_epi32(_mm256_mullo_epi32(by0, _mm256_set1_epi32(T.W)), bx0));
-  const unsigned in[4] = {in00, in10, in01, in11};
-  const std::size_t step[4] = {0, 1, std::size_t(T.W), std::size_t(T.W) + 1};
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < N * N; ++k) {
+    const std::size_t step = std::size_t(k % N) + std::size_t(k / N) * std::size_t(T.W);
     for (unsigned m = in[k]; m; m &= m - 1) {
       const int l = __builtin_ctz(m);
-      const std::size_t at = std::size_t(base[l]) + step[k];
+      const std::size_t at = std::size_t(base[l]) + step;
       float* d = T.depth + at;
       const float z = zs[k][l];
       if (z > *d) {
@@ -1005,7 +1020,7 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
   const __m256i part_mask = _mm256_set1_epi32(T.rows.parts - 1);
   const __m256i part = _mm256_set1_epi32(T.rows.part);
   alignas(32) int32_t lanes[17][8];  // the survivors' Edges, lane by lane
-  TinyQueue tq;
+  BoxQueue tq, sq;                   // boxes of at most 2 x 2 and 4 x 4 pixels
   std::size_t i = 0;
   for (; i + 8 <= count; i += 8) {
     const uint32_t* g = t + 3 * i;
@@ -1087,17 +1102,28 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                         _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), one));  // set: larger
     const unsigned tiny =
         ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(small2))) & pending & ~slow;
-    pending &= ~tiny;
-    // The tiny ones covering a centre to the queue, drawn eight at a time.
+    const __m256i three = _mm256_set1_epi32(3);
+    const __m256i small4 =
+        _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_sub_epi32(bx1, bx0), three),
+                        _mm256_cmpgt_epi32(_mm256_sub_epi32(by1, by0), three));  // set: larger
+    const unsigned small =
+        ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(small4))) & pending & ~slow & ~tiny;
+    pending &= ~(tiny | small);
+    // Boxes of at most 2 x 2 pixels covering a centre, and of at most 4 x 4, to their queues,
+    // drawn eight at a time.
     for (unsigned m = tiny & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(none))); m;
          m &= m - 1) {
-      const int k = __builtin_ctz(m);
-      tq.v[0][tq.n] = g[3 * k];
-      tq.v[1][tq.n] = g[3 * k + 1];
-      tq.v[2][tq.n] = g[3 * k + 2];
-      if (++tq.n == 8) {
-        tiny_batch(v, tq, 8, rgb, outward, T);
+      push(tq, g + 3 * __builtin_ctz(m));
+      if (tq.n == 8) {
+        box_batch<2>(v, tq, 8, rgb, outward, T);
         tq.n = 0;
+      }
+    }
+    for (unsigned m = small; m; m &= m - 1) {
+      push(sq, g + 3 * __builtin_ctz(m));
+      if (sq.n == 8) {
+        box_batch<4>(v, sq, 8, rgb, outward, T);
+        sq.n = 0;
       }
     }
     if (!pending) continue;
@@ -1144,7 +1170,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
       draw_edges<2>(eg, rgb, T);
     } while (pending);
   }
-  if (tq.n) tiny_batch(v, tq, tq.n, rgb, outward, T);
+  if (tq.n) box_batch<2>(v, tq, tq.n, rgb, outward, T);
+  if (sq.n) box_batch<4>(v, sq, sq.n, rgb, outward, T);
   for (; i < count; ++i) {
     drawn +=
         indexed_one<2>(v, t[3 * i], t[3 * i + 1], t[3 * i + 2], rgb, cull, outward, T, clip, ctx);
