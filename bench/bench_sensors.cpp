@@ -22,6 +22,7 @@
 //              bench_sensors --frames=10; a frame's count is the difference of two N)
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -340,7 +341,12 @@ int main(int argc, char** argv) {
         ->MeasureProcessCPUTime()
         ->Repetitions(9)
         ->ReportAggregatesOnly(true)
-        ->MinTime(0.3);
+        ->MinTime(0.3)
+        // The best repetition beside the median: on a shared machine the median of a run moves
+        // by a quarter from run to run (other tenants), the best far less.
+        ->ComputeStatistics("min", [](const std::vector<double>& v) {
+          return *std::min_element(v.begin(), v.end());
+        });
   };
   for (const auto& size : {std::make_pair(640, 480), std::make_pair(1280, 1024)}) {
     const std::string base =
