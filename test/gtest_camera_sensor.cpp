@@ -335,6 +335,37 @@ TEST(CameraSensor, WhereABoxWasTheNextFrameShowsTheBackground) {
   EXPECT_GT(green, 2000);
 }
 
+// CameraOutputs: the frame written into the caller's buffers (the node's messages) is the
+// frame the camera writes into its own, on the fused path (width 320) and the other (321); the
+// camera's own buffers are left as they were.
+TEST(CameraSensor, OutputsGoWhereTheCallerSays) {
+  for (const int width : {320, 321}) {
+    CameraSensorSpec s = odd_spec();
+    s.width = width;
+    s.ground = true;
+    const SE3 pose(optical_in_body() * Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix(),
+                   Vec3(0, 0.1, 1));
+    CameraSensor own(s), theirs(s);
+    const std::size_t n = std::size_t(s.width) * s.height;
+    std::vector<uint8_t> rgb(3 * n, 7);
+    std::vector<float> depth(n, 7.0f), cloud(4 * n, 7.0f);
+    const std::vector<uint8_t> rgb_before = theirs.rgb();
+    CameraOutputs out;
+    out.rgb = rgb.data();
+    out.depth = depth.data();
+    out.cloud = cloud.data();
+    for (int frame = 0; frame < 2; ++frame) {
+      own.render(pose, {}, the_box());
+      theirs.render(pose, {}, the_box(), out);
+      EXPECT_EQ(rgb, own.rgb()) << width;
+      EXPECT_EQ(std::memcmp(depth.data(), own.depth().data(), 4 * n), 0) << width;
+      EXPECT_EQ(std::memcmp(cloud.data(), own.cloud().data(), 16 * n), 0) << width;
+    }
+    EXPECT_EQ(theirs.rgb(), rgb_before) << width;
+    EXPECT_TRUE(std::isnan(theirs.depth()[n / 2])) << width;
+  }
+}
+
 // A camera sees the ground plane, not the viewer's grid lines: looking down at the origin
 // (where the grid's axes cross) every pixel is the background's colour.
 TEST(CameraSensor, NoGridLinesInTheImage) {

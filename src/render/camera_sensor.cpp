@@ -173,7 +173,8 @@ CameraSensor::CameraSensor(const CameraSensorSpec& spec)
 }
 
 void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
-                          const std::vector<Marker>& markers) {
+                          const std::vector<Marker>& markers, const CameraOutputs& out) {
+  uint8_t* const rgb_out = out.rgb ? out.rgb : rgb_.data();
   Camera cam = renderer_.camera();
   cam.eye = oMc.p;
   cam.target = oMc.p + oMc.R.col(2);
@@ -192,8 +193,10 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
   renderer_.style().paint = color_;
   renderer_.style().keep_background = !fused;
   renderer_.render(oMb, markers);
-  if (color_ && !fused) renderer_.copy_rgb8(rgb_.data());
+  if (color_ && !fused) renderer_.copy_rgb8(rgb_out);
   if (!spec_.depth) return;
+  float* const depth_out = out.depth ? out.depth : depth_.data();
+  float* const cloud_out = out.cloud ? out.cloud : cloud_.data();
 
   // Read through a const Renderer: its non-const framebuffer() drops the cached background.
   const Renderer& r = renderer_;
@@ -222,13 +225,13 @@ void CameraSensor::render(const SE3& oMc, const std::vector<SE3>& oMb,
     const float gb = ground ? float(g.y() * b + g.z()) : 1.0f;
     const std::size_t row = std::size_t(j) * W;
     const float* zr = zbuf + row;
-    float* dr = depth_.data() + row;
-    float* pr = cloud_.data() + 4 * row;
+    float* dr = depth_out + row;
+    float* pr = cloud_out + 4 * row;
     const uint32_t* cr = color + row;
     int i = 0;
 #if SE3_CAMERA_AVX2
     if (avx2) {
-      uint8_t* rgb8 = fused ? rgb_.data() + 3 * row : nullptr;
+      uint8_t* rgb8 = fused ? rgb_out + 3 * row : nullptr;
       int split = 0;
       uint32_t left = 0, right = 0;
       if (fused) r.background_row(j, split, left, right);

@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
-#include <cstring>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -411,8 +410,16 @@ void RenderedSensors::Impl::publish_camera(Sensor& s, const Frame& f, const ros:
     s.camera->set_color(s.image_pub.getNumSubscribers() > 0 ||
                         s.points_pub.getNumSubscribers() > 0);
   }
-  s.camera->render(oMc, f.poses);
+  // The frame straight into the messages' buffers (no copy of it), but for a noisy image, which
+  // is made from the camera's own.
   const se3::SensorNoise& n = s.spec.noise;
+  se3::render::CameraOutputs out;
+  if (!n.any()) out.rgb = s.image.data.data();
+  if (s.depth_pub) {
+    out.depth = reinterpret_cast<float*>(s.depth.data.data());
+    out.cloud = reinterpret_cast<float*>(s.points.data.data());
+  }
+  s.camera->render(oMc, f.poses, {}, out);
   const std::vector<uint8_t>& rgb = s.camera->rgb();
   if (!s.camera->color()) {
     // Nobody reads the colour image: only its CameraInfo goes out.
@@ -423,24 +430,18 @@ void RenderedSensors::Impl::publish_camera(Sensor& s, const Frame& f, const ros:
       const double v = rgb[k] + 255.0 * (n.stddev > 0 ? g(s.rng) : n.mean);
       s.image.data[k] = uint8_t(std::clamp(std::lround(v), 0L, 255L));
     }
-  } else {
-    std::memcpy(s.image.data.data(), rgb.data(), rgb.size());
   }
   s.image.header.stamp = stamp;
   s.info.header.stamp = stamp;
   if (s.camera->color()) s.image_pub.publish(s.image);
   s.info_pub.publish(s.info);
   if (!s.depth_pub) return;
-  const std::vector<float>& depth = s.camera->depth();
-  const std::vector<float>& cloud = s.camera->cloud();
-  std::memcpy(s.depth.data.data(), depth.data(), 4 * depth.size());
-  std::memcpy(s.points.data.data(), cloud.data(), 4 * cloud.size());
   if (n.any()) {
     // Depth noise in metres along the ray: the depth and the point move together.
     std::normal_distribution<double> g(n.mean, n.stddev);
     float* d = reinterpret_cast<float*>(s.depth.data.data());
     float* p = reinterpret_cast<float*>(s.points.data.data());
-    for (std::size_t k = 0; k < depth.size(); ++k) {
+    for (std::size_t k = 0; k < s.depth.data.size() / 4; ++k) {
       if (!std::isfinite(d[k])) continue;
       const double scale = 1.0 + (n.stddev > 0 ? g(s.rng) : n.mean) / d[k];
       d[k] = float(d[k] * scale);

@@ -75,6 +75,14 @@ bool check_camera_spec(const CameraSensorSpec& spec, std::string* error);
 DrawItem shape_item(const Shape& shape, const Eigen::Vector3f& rgb, int body,
                     const std::string& name);
 
+/// Where CameraSensor::render writes a frame, output by output (null: its own buffer): rgb
+/// width * height * 3 bytes, depth width * height floats, cloud width * height * 4 floats.
+struct CameraOutputs {
+  uint8_t* rgb = nullptr;
+  float* depth = nullptr;
+  float* cloud = nullptr;
+};
+
 class CameraSensor {
  public:
   /// Allocates every buffer (spec must pass check_camera_spec; bad values are clamped).
@@ -96,7 +104,14 @@ class CameraSensor {
   /// One frame seen from the optical frame at world pose oMc (z forward, x right, y down) with
   /// the bodies at oMb and the markers (scene objects drawn as box, cylinder, sphere markers
   /// write depth too). Fills rgb(), and depth() and cloud() when spec().depth. Allocates nothing.
-  void render(const SE3& oMc, const std::vector<SE3>& oMb, const std::vector<Marker>& markers = {});
+  void render(const SE3& oMc, const std::vector<SE3>& oMb,
+              const std::vector<Marker>& markers = {}) {
+    render(oMc, oMb, markers, CameraOutputs());
+  }
+  /// The same, writing each output given in `out` there instead (rgb(), depth() or cloud() then
+  /// keep their last frame): a caller's message buffers, saving a copy of the frame.
+  void render(const SE3& oMc, const std::vector<SE3>& oMb, const std::vector<Marker>& markers,
+              const CameraOutputs& out);
 
   /// rgb8, width * height * 3 bytes, rows top to bottom.
   const std::vector<uint8_t>& rgb() const { return rgb_; }
