@@ -48,6 +48,19 @@ const char* kTwoArms =
     "    base_pose: {position: [0.6, 0, 0], orientation: [0, 0, 1, 0]}\n"
     "    initial_positions: {panda_joint2: 0.5, panda_joint4: -2.0, panda_joint6: 2.5}\n";
 
+// Robot b of two_floating(): a free-floating double pendulum at x = 3, tumbling.
+std::string robot_b(const std::string& urdf) {
+  return "  - name: b\n"
+         "    urdf: " +
+         urdf +
+         "\n"
+         "    base: free\n"
+         "    joint_limits: false\n"
+         "    base_pose: {position: [3, 0, 0]}\n"
+         "    base_twist: [0, 0.4, 0, 0, 0.2, 0]\n"
+         "    initial_velocities: {joint1: -1.5}\n";
+}
+
 // Two free-floating double pendulums in zero gravity, apart, both tumbling.
 std::string two_floating(
     const std::string& second_urdf = "data/robots/double_pendulum_simple.urdf") {
@@ -58,17 +71,8 @@ std::string two_floating(
          "    base: free\n"
          "    joint_limits: false\n"
          "    base_twist: [0.3, -0.2, 0.5, 0.1, 0, 0]\n"
-         "    initial_velocities: {joint1: 2.0, joint2: -1.0}\n"
-         "  - name: b\n"
-         "    urdf: " +
-         second_urdf +
-         "\n"
-         "    namespace: b\n"
-         "    base: free\n"
-         "    joint_limits: false\n"
-         "    base_pose: {position: [3, 0, 0]}\n"
-         "    base_twist: [0, 0.4, 0, 0, 0.2, 0]\n"
-         "    initial_velocities: {joint1: -1.5}\n";
+         "    initial_velocities: {joint1: 2.0, joint2: -1.0}\n" +
+         robot_b(second_urdf) + "    namespace: b\n";
 }
 
 }  // namespace
@@ -555,24 +559,12 @@ TEST(MultiRobot, EachRobotsCollisionFollowsTheFirstOnesRules) {
   EXPECT_EQ(objs[index("b/base")].mu, 0.3);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
-
 namespace {
 
 // Robot b of two_floating() alone, as the node's own robot.
 std::string b_alone() {
-  return "gravity: [0, 0, 0]\nintegrator: rkmk4\ndt: 0.001\n"
-         "robots:\n"
-         "  - name: b\n"
-         "    urdf: data/robots/double_pendulum_simple.urdf\n"
-         "    base: free\n"
-         "    joint_limits: false\n"
-         "    base_pose: {position: [3, 0, 0]}\n"
-         "    base_twist: [0, 0.4, 0, 0, 0.2, 0]\n"
-         "    initial_velocities: {joint1: -1.5}\n";
+  return "gravity: [0, 0, 0]\nintegrator: rkmk4\ndt: 0.001\nrobots:\n" +
+         robot_b("data/robots/double_pendulum_simple.urdf");
 }
 
 }  // namespace
@@ -683,4 +675,9 @@ TEST(MultiRobot, EachRobotsAppliedEffortsCountItsDamping) {
   sim->robot_applied_joint_efforts(0, a);
   sim->applied_joint_efforts(e0);
   EXPECT_EQ(a, e0);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
 }

@@ -9,6 +9,8 @@ where their scene puts them, with no frame name shared; the world services list 
 and give each one's joints; right/chain_state carries what right/joint_states does, as
 chain_state does for left; right's trajectory controller publishes right/wrist/state;
 simulator/apply_wrench takes right's links as right/LINK (its TF frames) and moves only right."""
+import os
+import sys
 import threading
 import time
 import unittest
@@ -22,6 +24,9 @@ from se3_sim.srv import ApplyWrench, ApplyWrenchRequest
 from se3_sim.srv import GetEntities, GetEntityState, ResetSimulation, ResetSimulationRequest
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import wait_util  # noqa: E402
 
 
 class MultiRobotTest(unittest.TestCase):
@@ -83,13 +88,7 @@ class MultiRobotTest(unittest.TestCase):
                 cls.transforms[t.child_frame_id] = t.transform
 
     def wait_for(self, pred, timeout):
-        end = time.time() + timeout
-        while time.time() < end and not rospy.is_shutdown():
-            with self.lock:
-                if pred():
-                    return True
-            time.sleep(0.02)
-        return False
+        return wait_util.wait_for(self.lock, pred, timeout)
 
     def positions(self, who):
         with self.lock:

@@ -7,6 +7,7 @@ pendulum spawned over the block through simulator/spawn_entity, its URDF carryin
 bumper (libgazebo_ros_bumper.so, bumperTopicName bumper), is accepted in this scene with
 collision, comes to rest on the block (not through it) and reports the block on c/bumper."""
 import os
+import sys
 import threading
 import time
 import unittest
@@ -17,6 +18,9 @@ import rostest
 from geometry_msgs.msg import Pose, PoseStamped
 from se3_sim.msg import ContactsState, Resource, Result
 from se3_sim.srv import GetEntityState, SpawnEntity
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import wait_util  # noqa: E402
 
 BUMPER = """
   <gazebo reference="base_link">
@@ -48,13 +52,7 @@ class RobotContactTest(unittest.TestCase):
             cls.last[ns] = msg
 
     def wait_for(self, pred, timeout):
-        end = time.time() + timeout
-        while time.time() < end and not rospy.is_shutdown():
-            with self.lock:
-                if pred():
-                    return True
-            time.sleep(0.02)
-        return False
+        return wait_util.wait_for(self.lock, pred, timeout)
 
     def touching(self, ns, other):
         m = self.last.get(ns)

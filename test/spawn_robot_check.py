@@ -15,6 +15,7 @@ tool (rosrun se3_sim spawn -urdf -param ...) spawns it again, and a reset of the
 deletes it; allow_renaming gives a robot a suffix."""
 import math
 import subprocess
+import os
 import sys
 import threading
 import time
@@ -29,6 +30,9 @@ from se3_sim.msg import (ChainState, EntityCategory, LinkStates, ModelStates, Re
 from se3_sim.srv import (ApplyWrench, ApplyWrenchRequest, DeleteEntity, GetEntities, GetEntityState, ResetSimulation,
                          ResetSimulationRequest, SetEntityState, SpawnEntity, SpawnEntityResponse)
 from tf2_msgs.msg import TFMessage
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import wait_util  # noqa: E402
 
 PERIOD = 1.0 / 50  # the node's publish_rate
 
@@ -103,13 +107,7 @@ class SpawnRobotTest(unittest.TestCase):
             setattr(cls, attr, msg)
 
     def wait_for(self, pred, timeout):
-        end = time.time() + timeout
-        while time.time() < end and not rospy.is_shutdown():
-            with self.lock:
-                if pred():
-                    return True
-            time.sleep(0.005)
-        return False
+        return wait_util.wait_for(self.lock, pred, timeout, poll=0.005)
 
     def names(self):
         r = self.entities()

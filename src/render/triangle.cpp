@@ -807,6 +807,42 @@ SE3_AVX2 inline __m256i edge_avx2(__m256i x0, __m256i y0, __m256i x1, __m256i y1
   return _mm256_add_epi32(e, _mm256_xor_si256(top_left, _mm256_cmpeq_epi32(zero, zero)));
 }
 
+// The pixel boxes of eight triangles (pixels whose centre lies in their extent, clipped to
+// the image), as draw_triangle finds them.
+SE3_AVX2 inline void pixel_box_avx2(__m256i minx, __m256i maxx, __m256i miny, __m256i maxy,
+                                    const Target& T, __m256i& bx0, __m256i& bx1, __m256i& by0,
+                                    __m256i& by1) {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
+  bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
+  bx1 = _mm256_min_epi32(_mm256_set1_epi32(T.W - 1),
+                         _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
+  by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
+  by1 = _mm256_min_epi32(_mm256_set1_epi32(T.H - 1),
+                         _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
+}
+
+// Their edge functions as draw_boxed computes them: relative to the box's first centre, in
+// canonical winding (b and c swapped where the area is positive: the lanes returned), each
+// edge's value without (E) and with (Tl) the top-left rule and its steps per pixel.
+SE3_AVX2 inline __m256i edges_avx2(__m256i ax, __m256i ay, __m256i bx, __m256i by, __m256i cx,
+                                   __m256i cy, __m256i area, __m256i bx0, __m256i by0, __m256i E[3],
+                                   __m256i Tl[3], __m256i EX[3], __m256i EY[3]) {
+  const __m256i half = _mm256_set1_epi32(kHalf);
+  const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
+  const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
+  const __m256i swap = _mm256_cmpgt_epi32(area, _mm256_setzero_si256());
+  const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
+  const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
+  const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
+  const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
+  const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
+  Tl[0] = edge_avx2(px, py, qx, qy, E[0], EX[0], EY[0]);
+  Tl[1] = edge_avx2(qx, qy, rx, ry, E[1], EX[1], EY[1]);
+  Tl[2] = edge_avx2(rx, ry, px, py, E[2], EX[2], EY[2]);
+  return swap;
+}
+
 // The x and y of vertices g[0], g[S], ..., g[7 S] in lanes 0 .. 7: eight 8-byte loads of (x, y)
 // pairs, split by one shuffle each. (Gathers cost more: 2.27 -> 2.06 ms a 640 x 480 camera
 // frame, medians of five interleaved runs, AMD EPYC.)
@@ -863,7 +899,6 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
     for (int l = n; l < 8; ++l) q.v[j][l] = q.v[j][0];
   }
   const __m256i zero = _mm256_setzero_si256();
-  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
   __m256i ax, ay, bx, by, cx, cy;
   corner_avx2<1>(v.xy, q.v[0], ax, ay);
   corner_avx2<1>(v.xy, q.v[1], bx, by);
@@ -877,23 +912,10 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
   const __m256i maxx = _mm256_max_epi32(ax, _mm256_max_epi32(bx, cx));
   const __m256i miny = _mm256_min_epi32(ay, _mm256_min_epi32(by, cy));
   const __m256i maxy = _mm256_max_epi32(ay, _mm256_max_epi32(by, cy));
-  const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
-  const __m256i bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
-  const __m256i bx1 = _mm256_min_epi32(wmax, _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
-  const __m256i by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
-  const __m256i by1 = _mm256_min_epi32(hmax, _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
-  const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
-  const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
-  const __m256i swap = _mm256_cmpgt_epi32(area, zero);
-  const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
-  const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
-  const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
-  const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
-  const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
-  __m256i e0, e1, e2, ex0, ey0, ex1, ey1, ex2, ey2;
-  const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
-  const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
-  const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
+  __m256i bx0, bx1, by0, by1;
+  pixel_box_avx2(minx, maxx, miny, maxy, T, bx0, bx1, by0, by1);
+  __m256i E[3], Tl[3], EX[3], EY[3];
+  const __m256i swap = edges_avx2(ax, ay, bx, by, cx, cy, area, bx0, by0, E, Tl, EX, EY);
   // Coverage of the centres (i, j) (centre i + N j): only columns and rows the box has, rows
   // only where they are this thread's, lanes only up to n.
   const __m256i dead =
@@ -909,7 +931,7 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
   }
   unsigned in[N * N];
   unsigned any = 0;
-  __m256i u0 = t0, u1 = t1, u2 = t2;  // row j's first centre
+  __m256i u0 = Tl[0], u1 = Tl[1], u2 = Tl[2];  // row j's first centre
   for (int j = 0; j < N; ++j) {
     __m256i skip = _mm256_or_si256(dead, _mm256_cmpgt_epi32(_mm256_set1_epi32(j), tall));
     if (bands) {
@@ -923,13 +945,13 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
           i ? _mm256_or_si256(skip, _mm256_cmpgt_epi32(_mm256_set1_epi32(i), wide)) : skip);
       in[i + N * j] = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(out))) & 255u;
       any |= in[i + N * j];
-      w0 = _mm256_add_epi32(w0, ex0);
-      w1 = _mm256_add_epi32(w1, ex1);
-      w2 = _mm256_add_epi32(w2, ex2);
+      w0 = _mm256_add_epi32(w0, EX[0]);
+      w1 = _mm256_add_epi32(w1, EX[1]);
+      w2 = _mm256_add_epi32(w2, EX[2]);
     }
-    u0 = _mm256_add_epi32(u0, ey0);
-    u1 = _mm256_add_epi32(u1, ey1);
-    u2 = _mm256_add_epi32(u2, ey2);
+    u0 = _mm256_add_epi32(u0, EY[0]);
+    u1 = _mm256_add_epi32(u1, EY[1]);
+    u2 = _mm256_add_epi32(u2, EY[2]);
   }
   if (!any) return;
   // z and shade at the vertices in canonical winding (a, then b and c swapped where the
@@ -950,7 +972,7 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
   const __m256 c[3] = {_mm256_set1_ps(rgb[0]), _mm256_set1_ps(rgb[1]), _mm256_set1_ps(rgb[2])};
   alignas(32) float zs[N * N][8];
   alignas(32) uint32_t cs[N * N][8];
-  __m256i r0 = e0, r1 = e1, r2 = e2;  // row j's first centre, without the top-left rule
+  __m256i r0 = E[0], r1 = E[1], r2 = E[2];  // row j's first centre, without the top-left rule
   for (int j = 0; j < N; ++j) {
     __m256i f0 = r0, f1 = r1, f2 = r2;
     for (int i = 0; i < N; ++i) {
@@ -968,13 +990,13 @@ SE3_AVX2 void box_batch(const VertexArrays& v, BoxQueue& q, int n, const float r
           _mm256_store_si256(reinterpret_cast<__m256i*>(cs[k]), shade_avx2(c, kk));
         }
       }
-      f0 = _mm256_add_epi32(f0, ex0);
-      f1 = _mm256_add_epi32(f1, ex1);
-      f2 = _mm256_add_epi32(f2, ex2);
+      f0 = _mm256_add_epi32(f0, EX[0]);
+      f1 = _mm256_add_epi32(f1, EX[1]);
+      f2 = _mm256_add_epi32(f2, EX[2]);
     }
-    r0 = _mm256_add_epi32(r0, ey0);
-    r1 = _mm256_add_epi32(r1, ey1);
-    r2 = _mm256_add_epi32(r2, ey2);
+    r0 = _mm256_add_epi32(r0, EY[0]);
+    r1 = _mm256_add_epi32(r1, EY[1]);
+    r2 = _mm256_add_epi32(r2, EY[2]);
   }
   alignas(32) int32_t base[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(base),
@@ -1009,8 +1031,6 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
                                                            ClipCallback clip, void* ctx) {
   std::size_t drawn = 0;
   const __m256i zero = _mm256_setzero_si256();
-  const __m256i half1 = _mm256_set1_epi32(kHalf - 1), half = _mm256_set1_epi32(kHalf);
-  const __m256i wmax = _mm256_set1_epi32(T.W - 1), hmax = _mm256_set1_epi32(T.H - 1);
   const __m256i ext = _mm256_set1_epi32(kMaxExtent);
   // Lanes of front faces: the sign of the area, flipped when clockwise faces out.
   const __m256i flip = _mm256_set1_epi32(outward ? 0 : -1);
@@ -1048,11 +1068,8 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     const __m256i front = _mm256_xor_si256(_mm256_srai_epi32(area, 31), flip);
     const __m256i counted =
         _mm256_andnot_si256(_mm256_cmpeq_epi32(area, zero), _mm256_or_si256(front, back_ok));
-    // Pixels whose centre lies in the box (as in draw_triangle).
-    const __m256i bx0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(minx, half1), 4));
-    const __m256i bx1 = _mm256_min_epi32(wmax, _mm256_srai_epi32(_mm256_sub_epi32(maxx, half), 4));
-    const __m256i by0 = _mm256_max_epi32(zero, _mm256_srai_epi32(_mm256_add_epi32(miny, half1), 4));
-    const __m256i by1 = _mm256_min_epi32(hmax, _mm256_srai_epi32(_mm256_sub_epi32(maxy, half), 4));
+    __m256i bx0, bx1, by0, by1;
+    pixel_box_avx2(minx, maxx, miny, maxy, T, bx0, bx1, by0, by1);
     __m256i empty = _mm256_or_si256(_mm256_cmpgt_epi32(bx0, bx1), _mm256_cmpgt_epi32(by0, by1));
     if (bands) {  // the box within one band, another thread's
       const __m256i b0 = _mm256_sra_epi32(by0, shift), b1 = _mm256_sra_epi32(by1, shift);
@@ -1065,32 +1082,20 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     unsigned pending =
         (counted_m & ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(empty)))) | slow;
     if (!pending) continue;
-    // The edge functions as draw_boxed computes them: relative to the box's first centre, in
-    // canonical winding (b and c swapped where the area is positive).
-    const __m256i ox = _mm256_add_epi32(_mm256_slli_epi32(bx0, 4), half);
-    const __m256i oy = _mm256_add_epi32(_mm256_slli_epi32(by0, 4), half);
-    const __m256i swap = _mm256_cmpgt_epi32(area, zero);
-    const __m256i px = _mm256_sub_epi32(ax, ox), py = _mm256_sub_epi32(ay, oy);
-    const __m256i qx = _mm256_sub_epi32(_mm256_blendv_epi8(bx, cx, swap), ox);
-    const __m256i qy = _mm256_sub_epi32(_mm256_blendv_epi8(by, cy, swap), oy);
-    const __m256i rx = _mm256_sub_epi32(_mm256_blendv_epi8(cx, bx, swap), ox);
-    const __m256i ry = _mm256_sub_epi32(_mm256_blendv_epi8(cy, by, swap), oy);
-    __m256i e0, e1, e2, ex0, ey0, ex1, ey1, ex2, ey2;
-    const __m256i t0 = edge_avx2(px, py, qx, qy, e0, ex0, ey0);
-    const __m256i t1 = edge_avx2(qx, qy, rx, ry, e1, ex1, ey1);
-    const __m256i t2 = edge_avx2(rx, ry, px, py, e2, ex2, ey2);
+    __m256i E[3], Tl[3], EX[3], EY[3];
+    const __m256i swap = edges_avx2(ax, ay, bx, by, cx, cy, area, bx0, by0, E, Tl, EX, EY);
     // Boxes of at most 2 x 2 pixels (most survivors of a detailed mesh) that cover no
     // centre draw nothing. Sign bit set: the centre is outside.
-    const __m256i c00 = _mm256_or_si256(_mm256_or_si256(t0, t1), t2);
-    const __m256i c10 =
-        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(t0, ex0), _mm256_add_epi32(t1, ex1)),
-                        _mm256_add_epi32(t2, ex2));
-    const __m256i u0 = _mm256_add_epi32(t0, ey0), u1 = _mm256_add_epi32(t1, ey1),
-                  u2 = _mm256_add_epi32(t2, ey2);
+    const __m256i c00 = _mm256_or_si256(_mm256_or_si256(Tl[0], Tl[1]), Tl[2]);
+    const __m256i c10 = _mm256_or_si256(
+        _mm256_or_si256(_mm256_add_epi32(Tl[0], EX[0]), _mm256_add_epi32(Tl[1], EX[1])),
+        _mm256_add_epi32(Tl[2], EX[2]));
+    const __m256i u0 = _mm256_add_epi32(Tl[0], EY[0]), u1 = _mm256_add_epi32(Tl[1], EY[1]),
+                  u2 = _mm256_add_epi32(Tl[2], EY[2]);
     const __m256i c01 = _mm256_or_si256(_mm256_or_si256(u0, u1), u2);
     const __m256i c11 =
-        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, ex0), _mm256_add_epi32(u1, ex1)),
-                        _mm256_add_epi32(u2, ex2));
+        _mm256_or_si256(_mm256_or_si256(_mm256_add_epi32(u0, EX[0]), _mm256_add_epi32(u1, EX[1])),
+                        _mm256_add_epi32(u2, EX[2]));
     const __m256i one_col = _mm256_cmpeq_epi32(bx0, bx1), one_row = _mm256_cmpeq_epi32(by0, by1);
     const __m256i none =
         _mm256_and_si256(_mm256_and_si256(c00, _mm256_or_si256(c10, one_col)),
@@ -1133,18 +1138,18 @@ SE3_AVX2 __attribute__((flatten)) std::size_t indexed_avx2(const VertexArrays& v
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), by0);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), bx1);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[3]), by1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[4]), e0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[5]), e1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[6]), e2);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[7]), t0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[8]), t1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[9]), t2);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[10]), ex0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[11]), ex1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[12]), ex2);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[13]), ey0);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), ey1);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), ey2);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[4]), E[0]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[5]), E[1]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[6]), E[2]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[7]), Tl[0]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[8]), Tl[1]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[9]), Tl[2]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[10]), EX[0]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[11]), EX[1]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[12]), EX[2]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[13]), EY[0]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[14]), EY[1]);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[15]), EY[2]);
     _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[16]), _mm256_abs_epi32(area));
     do {
       const int k = __builtin_ctz(pending);

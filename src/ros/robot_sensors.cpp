@@ -115,14 +115,7 @@ RobotSensors::RobotSensors(ros::NodeHandle nh, const se3::Model& model,
         geometry_msgs::TransformStamped t;
         t.header.frame_id = link;
         t.child_frame_id = frame;
-        t.transform.translation.x = s.pose.p.x();
-        t.transform.translation.y = s.pose.p.y();
-        t.transform.translation.z = s.pose.p.z();
-        const Eigen::Quaterniond q(s.pose.R);
-        t.transform.rotation.x = q.x();
-        t.transform.rotation.y = q.y();
-        t.transform.rotation.z = q.z();
-        t.transform.rotation.w = q.w();
+        t.transform = to_transform(s.pose);
         tfs_.push_back(t);
       }
     }

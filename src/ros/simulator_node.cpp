@@ -1024,14 +1024,7 @@ void SimulatorNodeImpl::setup_sensors(const std::string& urdf_xml) {
       geometry_msgs::TransformStamped t;
       t.header.frame_id = link;
       t.child_frame_id = frame;
-      t.transform.translation.x = s.pose.p.x();
-      t.transform.translation.y = s.pose.p.y();
-      t.transform.translation.z = s.pose.p.z();
-      const Eigen::Quaterniond q(s.pose.R);
-      t.transform.rotation.x = q.x();
-      t.transform.rotation.y = q.y();
-      t.transform.rotation.z = q.z();
-      t.transform.rotation.w = q.w();
+      t.transform = to_transform(s.pose);
       sensor_tfs_.push_back(t);
     }
     sensor_frames_.push_back(frame);
